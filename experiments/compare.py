@@ -460,7 +460,8 @@ def compare(
     Args:
         sources: Source objects, or strings as for :func:`parse_sources` (seed 0).
         methods: extractor names; the order does not matter (it is rotated per scan).
-        params: per-method overrides of config fields, ``{"hough": {"rho_step": 0.01}}``.
+        params: per-method overrides of config fields, ``{"hough": {"rho_step": 0.01}}``; only for
+            methods in ``methods`` (another method's entry is an InputError, before any source is read).
         score_config: line / corner matching tolerances.
         sigma: range noise, 1 sigma (m, in [MIN_SIGMA_M, MAX_SIGMA_M]: 0.1 mm to 1000 m), for the
             noise-scaled explained fractions, or "auto": the sensor model's for simulated sources,
@@ -504,6 +505,10 @@ def compare(
     if not isinstance(params, dict) or not all(isinstance(v, dict) for v in params.values()):  # 'int' object has no attribute 'get'
         raise InputError(f"params: must be a mapping of method name to its fields, {{'hough': {{'rho_step': 0.01}}}}, "
                          f"got {shown(params)}")
+    idle = next((m for m in params if m not in methods), None)
+    if idle is not None:  # its fields were dropped without a word: a typo'd or left-out method ran on its defaults
+        raise InputError(f"params: {shown(idle)} is not among the methods run ({', '.join(methods)}); "
+                         f"give parameters only for a method in methods")
     if isinstance(sources, (str, bytes)):
         raise InputError(f"sources: must be a list of sources, got the text {sources!r} (give [{sources!r}])")
     try:
@@ -599,17 +604,27 @@ def compare(
 
 def _first_checked(src: Source) -> Iterable[Record]:
     """``src``'s records, its first scan's beams checked (:func:`check_beams`) now, before its range
-    noise is estimated; a list of records is left as it is (re-iterable, for that estimate)."""
+    noise is estimated; a list of records is left as it is (re-iterable, for that estimate). The
+    first scans of a source not read by a log reader (records of the user's, which the readers'
+    check does not see) are checked for ranges in millimetres (``lms200.units``: a warning)."""
+    from lms200.units import UNITS_SCANS, warn_units
+
     if isinstance(src.records, Sequence):
         if len(src.records):
             check_beams(src.records[0].scan, f"{source_label(src)}: scan 0")
+            if src.reader is None:
+                warn_units([rec.scan for rec in src.records[:UNITS_SCANS]], source_label(src))
         return src.records
     it = iter(src.records)
     first = next(it, None)  # a log's records check their beams as read (log_source), naming the log's path
     if first is None:
         return ()
     check_beams(first.scan, f"{source_label(src)}: scan 0")
-    return itertools.chain([first], it)
+    if src.reader is not None:
+        return itertools.chain([first], it)
+    head = [first, *itertools.islice(it, UNITS_SCANS - 1)]
+    warn_units([rec.scan for rec in head], source_label(src))
+    return itertools.chain(head, it)
 
 
 def source_label(src: Source) -> str:

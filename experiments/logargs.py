@@ -29,9 +29,12 @@ def _float(text: str) -> float:
     10) and non-ASCII digits ("١٢" read as 12) are a ValueError, "invalid float value", as for any other
     word that is no number (the four geometry flags took them: `--laser-fov-deg 1_0` read a 10 deg field of
     view, exit 0; found by fuzzing). nan and inf pass here and are refused by LaserGeometry, naming the flag."""
-    from experiments.options import plain_number
+    from experiments.options import Underflow, plain_number
 
-    return plain_number(text)
+    try:
+        return plain_number(text)
+    except Underflow as exc:  # --laser-angle-min-deg 1e-400 read 0 deg: argparse's "invalid float value" would hide why
+        raise argparse.ArgumentTypeError(f"got {text!r}: {exc}") from None
 
 
 _float.__name__ = "float"  # argparse's message: "invalid float value: '1_0'"

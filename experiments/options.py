@@ -25,6 +25,7 @@ import yaml
 
 from lms200.carmen import COMPRESSION_SUFFIXES, PIPE_REASON, READ_ERRORS, compression, open_bytes
 from lms200.errors import InputError as InputError  # bad option values and input files: the library's one class
+from lms200.finite import underflow_problem
 from lms200.logs import SIMULATE_LOG, SIMULATE_OTHER_FILES, head_problem
 from lms200.timing import MAX_DURATION_S, MIN_DURATION_S  # a simulated run's bounds (s)
 from lms200.yamlio import load as load_yaml, size_problem
@@ -234,13 +235,25 @@ def number_text(value: float) -> str:
     return short if float(short) == value else repr(float(value))
 
 
+class Underflow(ValueError):
+    """A number written nonzero that float64 reads as 0 (``lms200.finite.underflow_problem``)."""
+
+
 def plain_number(text: str, integer: bool = False) -> float:
     """``int(text)`` or ``float(text)`` of a number as a command line writes it; ValueError also for
     underscores and non-ASCII digits, which Python reads ("1_0" as 10 and "٣" as 3: a typo of 1.0
-    ran 10 s) and the CARMEN reader refuses, as strtod does."""
+    ran 10 s) and the CARMEN reader refuses, as strtod does; :class:`Underflow` (a ValueError, its
+    message the reason) for a number written nonzero that reads as 0 (``--clutter 1e-400`` ran
+    an empty office)."""
     if "_" in text or not text.isascii():
         raise ValueError(f"not a plain number: {text!r}")
-    return int(text) if integer else float(text)
+    if integer:
+        return int(text)
+    value = float(text)
+    problem = underflow_problem(text, value)
+    if problem:
+        raise Underflow(problem)
+    return value
 
 
 def number(lo: float | None = None, hi: float | None = None, *, lo_open: bool = False, unit: str = "",
@@ -258,6 +271,8 @@ def number(lo: float | None = None, hi: float | None = None, *, lo_open: bool = 
     def parse(text: str):
         try:
             value = plain_number(text, integer)
+        except Underflow as exc:
+            raise argparse.ArgumentTypeError(f"must be {what}, got {text!r}: {exc}") from None
         except ValueError:
             raise argparse.ArgumentTypeError(f"must be {what}, got {text!r}") from None
         try:

@@ -292,6 +292,8 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
                              + (f", at most {max_scans} (--max-scans)" if max_scans is not None else ""))
     if truth is not None:  # groundtruth.tum: its scores need it beside the scans (see _check_truth_span)
         _check_truth_span(truth, records, sources["truth"])
+    if rel is not None:
+        _check_relations_span(rel, records, sources["relations"], max_scans if len(records) == max_scans else None)
     if truth is None and all(r.truth is not None for r in records):
         truth = np.array([(r.scan.stamp, *r.truth) for r in records], float)
         sources["truth"] = f"{log} (TRUEPOS)"
@@ -319,6 +321,29 @@ def _check_truth_span(truth: np.ndarray, records: list[Record], where: str) -> N
         raise LmsbenchError(f"{where}: its stamps ({fixed(t0)} to {fixed(t1)} s) cover {inside} of the {len(records)} scans "
                             f"to run on ({fixed(stamps[0])} to {fixed(stamps[-1])} s); scoring against it needs two or more "
                             "(the ground truth of another run, or stamps of another clock?)")
+
+
+def _check_relations_span(relations: np.ndarray, records: list[Record], where: str, cut: int | None) -> None:
+    """LmsbenchError naming the relations file, before any work, when none of its relations lies within
+    the time span of the scans to run on (both stamps: the relations error scores no other), as
+    ``_check_truth_span`` does for ground truth: another log's relations (MIT CSAIL's given with the
+    Intel log) ran the whole SLAM, warned "the relations error covers 0 of the file's 1172 relations"
+    and wrote metrics.json without a relations score, exit 0. ``cut``: the --max-scans that stopped
+    the read early; then relations after the last scan read may be the log's own, past the cut, and
+    are left to the run's warning (those before its first scan are not)."""
+    stamps = np.array([r.scan.stamp for r in records])
+    lo, hi = float(stamps.min()), float(stamps.max())
+    t1, t2 = relations[:, 0], relations[:, 1]
+    if np.any((np.minimum(t1, t2) >= lo - 1e-9) & (np.maximum(t1, t2) <= hi + 1e-9)):
+        return
+    first, last = float(relations[:, :2].min()), float(relations[:, :2].max())
+    if cut is not None and last > hi:  # some lie past the cut: the log's own, perhaps (the run warns)
+        return
+    scans = f"the {len(records)} scans read (at most {cut}, --max-scans)" if cut is not None else \
+        f"the log's {len(records)} scans to run on"
+    raise LmsbenchError(f"{where}: none of its {len(relations)} relations lies within the scans' time span: the relations "
+                        f"span {fixed(first)} to {fixed(last)} s, {scans} {fixed(lo)} to {fixed(hi)} s; the relations "
+                        "error would score nothing (the relations of another log, or stamps of another clock?)")
 
 
 def score(traj: np.ndarray, data: SlamInput, result: SlamResult | None = None) -> dict[str, Any]:

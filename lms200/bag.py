@@ -1640,6 +1640,12 @@ class BagReader:
             self.stats.stopped = f"{where}: {reason}"
 
     def __iter__(self) -> Iterator[Record]:
+        """The bag's records, one pass; its first scans checked for ranges in millimetres (``lms200.units``)."""
+        from .units import units_watched
+
+        return units_watched(self._pass(), str(self.path))
+
+    def _pass(self) -> Iterator[Record]:
         self.stats = stats = BagReadStats(laser=self.topic)
         reader = self._open()
         try:

@@ -492,6 +492,12 @@ class CarmenReader:
         return raw
 
     def __iter__(self) -> Iterator[Record]:
+        """The log's records, one pass; its first scans checked for ranges in millimetres (``lms200.units``)."""
+        from .units import units_watched
+
+        return units_watched(self._pass(), str(self.path))
+
+    def _pass(self) -> Iterator[Record]:
         flushes: list[Callable[[], Iterator[Record]]] = []  # this pass's flush() of what holds records back
         # id(scan) -> the laser's pose on the robot (laser_mount) of each record read and not yet given: its
         # poses are the robot's until the corrected chain and the held tails are done with it (the ODOM

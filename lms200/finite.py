@@ -54,6 +54,20 @@ def fixed(value: float, decimals: int = 6) -> str:
     return f"{value:.{decimals}f}"
 
 
+def underflow_problem(text: str, value: float) -> str | None:
+    """Why the number ``text``, which ``float()`` read as ``value``, is refused, or None: written
+    nonzero (a digit 1-9 before its exponent) but read as 0.0, being below float64's smallest
+    nonzero magnitude (4.9e-324): ``noise_sigma: 1e-400`` in a settings file, or ``--clutter
+    1e-400``, ran as 0 without a word (a noise-free run, an empty office)."""
+    if value != 0.0:
+        return None
+    written = text.strip()
+    mantissa = written.lower().split("e", 1)[0]
+    if not any(c in "123456789" for c in mantissa):
+        return None
+    return f"{written} is below float64's smallest nonzero number (4.9e-324) and would be read as 0; write 0 for zero"
+
+
 def overflow_text(value: object) -> str:
     """How a value beyond float64 is named in a message: by its type, never printed ("an int", "a Fraction")."""
     name = type(value).__name__

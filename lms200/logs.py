@@ -6,13 +6,16 @@ name; both yield :class:`lms200.Record` objects.
 
 from __future__ import annotations
 
+import bz2
 import glob
 import itertools
+import lzma
 import os
 import shutil
 import sqlite3
 import stat
 import time
+import zlib
 from pathlib import Path
 from typing import Callable, Iterable, Iterator
 
@@ -429,12 +432,50 @@ MAX_HEADING_RAD = records.MAX_HEADING_RAD
 ``slam.metrics`` may hold (160,000 turns): a float of 1e300 holds no angle, and it was read as one."""
 
 
+#: decompressed bytes :func:`head_problem` reads from a compressed head to tell a CARMEN log (bounded: the
+#: head alone is decompressed, never the file)
+PEEK_BYTES = 8192
+
+
+def carmen_message(head: bytes, whole: bool = False) -> tuple[int, str] | None:
+    """(line number, message name) when the first line of text ``head`` that is no comment starts with a
+    CARMEN message name (as :func:`row_lines` tells a log given as a row file), else None. A last line
+    without its end counts only when ``whole`` (the head is the whole text)."""
+    text = head.removeprefix(b"\xef\xbb\xbf").decode("ascii", "replace")  # a UTF-8 byte-order mark skipped
+    lines = text.split("\n") if "\n" in text or "\r" not in text else text.split("\r")  # classic Mac ends
+    for no, line in enumerate(lines if whole else lines[:-1], 1):
+        words = line.split(maxsplit=1)
+        if words and not words[0].startswith("#"):
+            return (no, words[0]) if words[0] in KNOWN_KINDS else None
+    return None
+
+
+def _unpacked_head(head: bytes, kind: str) -> tuple[bytes, bool]:
+    """The first decompressed bytes (at most PEEK_BYTES) of the gzip, xz or bzip2 stream that starts
+    with ``head``, and whether they are the whole text; (b"", False) where none can be had from the
+    head (a bzip2 block of 100-900 KB of text that the head does not hold whole; a broken stream)."""
+    try:
+        if kind == "gzip":
+            gz = zlib.decompressobj(wbits=16 + zlib.MAX_WBITS)  # the gzip format, as the gzip module reads it
+            return gz.decompress(head, PEEK_BYTES), gz.eof
+        if kind in ("xz", "bzip2"):  # a bzip2 block decompresses only once whole: in the head, a small file's alone
+            unpack = lzma.LZMADecompressor(format=lzma.FORMAT_XZ) if kind == "xz" else bz2.BZ2Decompressor()
+            return unpack.decompress(head, PEEK_BYTES), unpack.eof
+    except (zlib.error, lzma.LZMAError, OSError, EOFError):
+        pass
+    return b"", False
+
+
 def head_problem(head: bytes, what: str, packed: bool = True) -> str | None:
     """Why a file whose first bytes are ``head`` is not ``what``, a text file: compressed (unless ``packed``
-    is False: the caller reads through it), an archive, binary; or None. The one wording of the row files'
+    is False: the caller reads through it), a compressed CARMEN log (its head's first PEEK_BYTES
+    decompressed bytes say so), an archive, binary; or None. The one wording of the row files'
     readers and of the command line's check of every text file (``experiments.options``)."""
     kind, archive = compression(head) if packed else None, archive_kind(head)
     if kind:
+        message = carmen_message(*_unpacked_head(head, kind))
+        if message:  # a gzip-compressed MIT CSAIL log given as --relations was told to be decompressed
+            return f"{'an' if kind == 'xz' else 'a'} {kind}-compressed CARMEN log (its line {message[0]} is a {message[1]} message), not {what}"
         return f"{kind}-compressed, not {what} (read as plain text); decompress it first"
     if archive:
         return f"{archive}, not {what}; extract it first"

@@ -11,7 +11,8 @@ PyYAML, which shares the objects, but endless to the ``repr`` of an error messag
 scalar its tag cannot make (an impossible date, ``seed: 2025-02-30``, or ``!!float abc``: Python's
 ValueError, without the file or line), and a number that YAML 1.1 reads otherwise than YAML 1.2,
 Python and the command line (``k: 1_0`` read as 10, ``duration: 1:30`` as 90, ``seed: 010`` as 8;
-quoted, each is text for the field's own check), and a value written as one of YAML 1.1's boolean
+quoted, each is text for the field's own check), a float written nonzero that float64 reads as 0
+(``noise_sigma: 1e-400``: a noise-free run), and a value written as one of YAML 1.1's boolean
 words other than true / false (``yes``, ``no``, ``on``, ``off``, ``y``, ``n``, any case, unquoted:
 ``deskew: no`` was False, ``y`` text; a key such as ``on:`` reads as before). Hexadecimal (``0x10``), binary (``0b101``),
 ``.inf`` and ``.nan`` read as before. All
@@ -26,7 +27,7 @@ from typing import Any
 
 import yaml
 
-from .finite import digit_limit_problem
+from .finite import digit_limit_problem, underflow_problem
 
 
 class Loader(yaml.SafeLoader):
@@ -102,11 +103,26 @@ def yaml11_bool(loader: Loader, node: yaml.Node) -> str | None:
     return f"{text} {read}; write true or false, or quote it ('{text}') for text"
 
 
+def float_underflow(node: yaml.Node) -> str | None:
+    """Why ``node``, a float scalar written nonzero that reads as 0.0 (``noise_sigma: 1e-400``: below
+    float64's smallest nonzero number), is refused, or None (``lms200.finite.underflow_problem``): the
+    run took it for 0 without a word (a noise-free run)."""
+    if not isinstance(node, yaml.ScalarNode) or node.tag != _FLOAT_TAG:
+        return None
+    try:
+        value = float(node.value)
+    except ValueError:  # .inf, 1:30, !!float abc: the constructor reads or refuses them
+        return None
+    return underflow_problem(node.value, value)
+
+
 def _refuse_yaml11_number(loader: Loader, node: yaml.Node, where: str = "", key: bool = False) -> None:
     """Raise a YAML error at ``node`` (``where``: "key 'k': " before the problem) if
-    ``yaml11_number`` finds it reads as another number, or, unless it is a mapping's ``key``,
-    ``yaml11_bool`` finds it a YAML 1.1 boolean word."""
-    problem = yaml11_number(loader, node) or (None if key or not loader.refuse_words else yaml11_bool(loader, node))
+    ``yaml11_number`` finds it reads as another number, ``float_underflow`` that it reads as 0
+    though written nonzero, or, unless it is a mapping's ``key``, ``yaml11_bool`` finds it a
+    YAML 1.1 boolean word."""
+    problem = yaml11_number(loader, node) or float_underflow(node) \
+        or (None if key or not loader.refuse_words else yaml11_bool(loader, node))
     if problem:
         raise yaml.constructor.ConstructorError(None, None, where + problem, node.start_mark)
 

@@ -8,6 +8,7 @@ Registered as ``lmsbench/Office-v0`` (``import sim`` registers it, or pass
 - Action: (forward speed m/s, turn rate rad/s) in [0, v_max] x [-w_max, w_max]; held for one
   control period (0.1 s); the pose moves along the exact unicycle arc and the scan is taken at
   the end of the period while moving (interlaced beams).
+- Path: the first ``path_length_m`` metres of the route ``robot_tour(world, world_seed)`` drives.
 - Reward: metres of progress along the world's planned tour path (arc length of the robot's
   projection, searched near the previous one) minus 0.01 a step; -10 on collision.
 - Termination: collision (the robot's disc of radius 0.25 m touches a face or circle) or the end
@@ -27,7 +28,7 @@ from lms200.codes import unmasked
 from lms200.errors import InputError
 
 from .lidar import LMS200Sim
-from .robot import RobotLimits, robot_tour, wrap
+from .robot import RobotLimits, tour_path, wrap
 from .sensor import SensorConfig
 from .worlds import check_seed, make_world
 
@@ -53,9 +54,9 @@ class OfficeEnv(gym.Env):
         self.max_steps = int(max_steps)
         self.render_mode = render_mode
         self.sim = LMS200Sim(self.world, self.sensor, seed=0)
-        path = robot_tour(self.world, world_seed, duration=path_length_m / self.limits.v_max).waypoints
-        keep = np.concatenate(([True], np.hypot(*np.diff(path, axis=0).T) > 1e-9))
-        self.path = path[keep]
+        # the path is path_length_m long (it was planned as a tour of path_length_m / v_max seconds, 5 m
+        # more and to the end of its last leg: 66.7 m for the default 60, 12.9 m for 5)
+        self.path = tour_path(self.world, world_seed, float(path_length_m))
         seg = np.diff(self.path, axis=0)
         self._seg_len = np.hypot(seg[:, 0], seg[:, 1])
         self._arc = np.concatenate(([0.0], np.cumsum(self._seg_len)))

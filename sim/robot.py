@@ -180,6 +180,24 @@ def plan_waypoints(world: World, rng: np.random.Generator, length_m: float) -> t
     return nodes[path], np.array(is_target)
 
 
+def tour_path(world: World, seed: int, length_m: float) -> np.ndarray:
+    """The start of the route :func:`robot_tour` (same ``world`` and ``seed``) drives, as (k, 2)
+    waypoints (m, world frame, no two alike) cut on its last edge to a path of exactly ``length_m`` m.
+
+    Raises:
+        LmsbenchError: when the world's route graph joins no two route targets.
+    """
+    pts, _ = plan_waypoints(world, np.random.default_rng([int(seed), _STREAM_TOUR]), length_m=length_m)
+    pts = pts[np.concatenate(([True], np.hypot(*np.diff(pts, axis=0).T) > 1e-9))]
+    arc = np.concatenate(([0.0], np.cumsum(np.hypot(*np.diff(pts, axis=0).T))))
+    if arc[-1] < length_m:  # no leg: one target alone, or none reachable from the first
+        raise LmsbenchError(f"world {world.name!r}: its route graph joins no two route targets, so the robot "
+                            "has nowhere to drive (route_edges must connect route_targets)")
+    k = int(np.searchsorted(arc, length_m))  # arc[k - 1] < length_m <= arc[k]
+    t = (length_m - arc[k - 1]) / (arc[k] - arc[k - 1])
+    return np.vstack((pts[:k], pts[k - 1] + t * (pts[k] - pts[k - 1])))
+
+
 def check_duration(duration: object) -> None:
     """``duration`` is a number of seconds in (0, MAX_DURATION_S] (numpy numbers too); InputError naming it."""
     ok = not isinstance(duration, (bool, np.bool_)) and isinstance(duration, (int, float, np.integer, np.floating))

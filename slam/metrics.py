@@ -101,9 +101,10 @@ def align_2d(est_xy: np.ndarray, true_xy: np.ndarray) -> tuple[Alignment2D, floa
     for name, xy in (("est_xy", est_xy), ("true_xy", true_xy)):
         if xy.shape[0] == 0:
             raise InputError(f"{name}: has no points")
-        if np.abs(xy).max() > MAX_COORD_M:
-            raise InputError(f"{name}: row {int(np.nonzero((np.abs(xy) > MAX_COORD_M).any(1))[0][0])}: x or y beyond "
-                             f"+-{MAX_COORD_M:g} m")
+        if np.abs(xy).max() > MAX_COORD_M:  # it said "x or y beyond +-1e+09 m": not the value, nor that it is a bound
+            k = int(np.nonzero((np.abs(xy) > MAX_COORD_M).any(1))[0][0])
+            raise InputError(f"{name}: row {k}: x and y must be within +-{MAX_COORD_M:g} m, got "
+                             f"({xy[k, 0]:.6g}, {xy[k, 1]:.6g}) m")
     if est_xy.shape[0] != true_xy.shape[0]:
         raise InputError(f"est_xy and true_xy: must hold one point each for the other, got {est_xy.shape[0]} and "
                          f"{true_xy.shape[0]}")

@@ -98,18 +98,28 @@ def test_a_compressed_or_binary_tum_or_relations_file_is_said_to_be_one(tmp_path
     8 numbers (t1 t2 x y z roll pitch yaw), got 16"; a PNG "got 1", a CARMEN log "line 3: ..., got 3". Refused as
     what it is, naming the file."""
     import gzip
+    import lzma
 
     from lms200 import read_tum
+    from lms200.logs import PEEK_BYTES
     from slam.metrics import read_relations
 
     read = read_tum if kind == "tum" else read_relations
     text = b"1.0 0 0 0 0 0 0 1\n2.0 0 0 0 0 0 0 1\n"
+    log = b"# a log\n\nPARAM laser_front_laser_resolution 1.0\nFLASER 3 1 1 1 0 0 0 0 0 0 1.0 h 1.0\n"
     for name, data, said in (("r.gz", gzip.compress(text), f"gzip-compressed, not {what} (read as plain text); "
                                                            "decompress it first"),
                              ("r.bz2", __import__("bz2").compress(text), "bzip2-compressed, not"),
                              ("r.png", b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR" + text, f"a binary file, not {what}"),
-                             ("r.clf", b"# a log\n\nPARAM laser_front_laser_resolution 1.0\nFLASER 3 1 1 1 0 0 0 0 0 0 1.0 h 1.0\n",
-                              f"a CARMEN log (its line 3 is a PARAM message), not {what}")):
+                             ("r.clf", log, f"a CARMEN log (its line 3 is a PARAM message), not {what}"),
+                             # told to be decompressed, as if that would make it a relations file
+                             ("r.clf.gz", gzip.compress(log), f"a gzip-compressed CARMEN log (its line 3 is a PARAM "
+                                                              f"message), not {what}"),
+                             ("r.clf.xz", lzma.compress(log), f"an xz-compressed CARMEN log (its line 3 is a PARAM "
+                                                              f"message), not {what}"),
+                             ("r.clf.bz2", __import__("bz2").compress(log), "a bzip2-compressed CARMEN log (its line 3"),
+                             # only the head's first PEEK_BYTES are decompressed: a message past them is not seen
+                             ("r2.clf.gz", gzip.compress(b"#" * PEEK_BYTES + b"\n" + log), "gzip-compressed, not")):
         (tmp_path / name).write_bytes(data)
         with pytest.raises(LogFormatError, match=rf"^{tmp_path / name}: {re.escape(said)}"):
             read(tmp_path / name)

@@ -138,6 +138,7 @@ def files(tmp_path_factory):
     (d / "sensor_flag.yaml").write_text("quantise: 3\n")
     (d / "sensor_dup.yaml").write_text("noise_sigma: 0.005\nmixed_gap: 0.1\nnoise_sigma: 0.5\n")
     (d / "sensor_mm.yaml").write_text("noise_sigma: 5\n")  # millimetres meant: 5 m of noise ran
+    (d / "sensor_underflow.yaml").write_text("noise_sigma: 1e-400\n")  # read as 0: a noise-free run
     (d / "sensor_cm.yaml").write_text("n_beams: 361\nresolution: 0.008726646259971648\nunits: cm\nnoise_sigma: 0.44\n")  # cm meant
     (d / "sensor_slope_mm.yaml").write_text("noise_sigma: 0.005\nnoise_sigma_per_m: 0.5\n")  # mm per m meant
     (d / "sensor_gap_cm.yaml").write_text("noise_sigma: 0.005\nmixed_gap: 10\n")  # cm meant: no mixed pixel at all
@@ -281,6 +282,14 @@ CASES = [
     (["simulate", "--config", "{run_list.yaml}", "--out", O], "(duration: must be a number, got [2])"),
     (["simulate", "--config", "{run_robot.yaml}", "--out", O], "(robot: must be a mapping of fields, got 5)"),
     (["simulate", "--sensor", "{sensor_mm.yaml}", "--out", O], "sensor_mm.yaml: noise_sigma: must be in [0, 0.1] m"),
+    # a float written nonzero that float64 reads as 0 ran as 0: a noise-free run, an office with no clutter
+    (["simulate", "--sensor", "{sensor_underflow.yaml}", "--out", O], "sensor_underflow.yaml: not valid YAML (line 1, "
+     "column 14: key 'noise_sigma': 1e-400 is below float64's smallest nonzero number (4.9e-324) and would be read as 0; "
+     "write 0 for zero)"),
+    (["simulate", "--clutter", "1e-400", "--out", O], "argument --clutter: must be a finite number >= 0 and <= 10 (10x a "
+     "furnished office at most), got '1e-400': 1e-400 is below float64's smallest nonzero number (4.9e-324)"),
+    (["info", "{good.clf}", "--laser-angle-min-deg", "-1e-999"], "argument --laser-angle-min-deg: got '-1e-999': -1e-999 "
+     "is below float64's smallest"),
     # a calibrated sensor with its noise in cm (MIT CSAIL's 4.4 mm as 0.44): sim2real compared the log
     # against 0.44 m of noise ("sensor: noise 440.00 mm", largest gap 0.514), exit 0
     (["sim2real", "{good.clf}", "--sensor", "{sensor_cm.yaml}", "--out", O], "sensor_cm.yaml: noise_sigma: must be in [0, "
@@ -310,6 +319,9 @@ CASES = [
     (["compare", "office", "--set", "extractor.k=abc", "--out", O], "k"),
     (["compare", "office", "--set", "extractor.hough.rho_step=0", "--out", O], "rho_step"),
     (["compare", "office", "--set", "extractor.kk=3", "--out", O], "kk"),
+    # a method's fields for a method not run: as the library's compare(params=...) refuses them
+    (["compare", "office", "--methods", "sensor", "--set", "extractor.iepf.split_threshold=0.05", "--out", O],
+     "extractor.iepf.split_threshold: 'iepf' is not an extractor of this run; known: sensor"),
     (["compare", "office", "--set", "sensor.k=3", "--out", O], "extractor.sensor.k"),
     (["compare", "office", "--set", "novalue", "--out", O], "--set"),
     # Python's int() / float() take underscores and other scripts' digits: 1_0 (a typo of 1.0) ran 10 s,
@@ -459,9 +471,13 @@ CASES = [
                                                               "numbers within +-1e+06 m)"),
     # a compressed file where YAML is read: passed the check (its text is inside), then "internal error:
     # UnicodeDecodeError: 'utf-8' codec can't decode byte 0x8b"
-    (["simulate", "--config", "{good.clf.gz}", "--out", O], "good.clf.gz: gzip-compressed, not a simulate config.yaml "
-                                                            "(read as plain text); decompress it first"),
-    (["sweep", "{good.clf.gz}", "--out", O], "good.clf.gz: gzip-compressed, not a sweep file"),
+    # (a compressed CARMEN log, said to be one: it was told to be decompressed, as if that would make it YAML)
+    (["simulate", "--config", "{good.clf.gz}", "--out", O], "good.clf.gz: a gzip-compressed CARMEN log (its line 4 is "
+                                                            "a PARAM message), not a simulate config.yaml"),
+    (["sweep", "{good.clf.gz}", "--out", O], "good.clf.gz: a gzip-compressed CARMEN log (its line 4 is a PARAM message), "
+                                             "not a sweep file"),
+    (["slam", "{good.clf}", "--relations", "{good.clf.gz}", "--out", O], "good.clf.gz: a gzip-compressed CARMEN log (its "
+                                                                       "line 4 is a PARAM message), not a relations file"),
     # options that apply to what the run does not do were ignored, exit 0
     # (with the default preset they set its paper-preset baselines: refused only when neither runs; review)
     (["slam", "{simrun}", "--association", "jcbb", "--no-paper-baseline", "--no-odometry-baseline", "--out", O],

@@ -382,6 +382,16 @@ def test_compare_names_a_bad_argument_before_any_work(args, kw: dict, message: s
         compare(*args(sim_source("office", duration=0.1, rate_hz=None)), **kw)
 
 
+def test_compare_refuses_parameters_of_a_method_it_does_not_run_before_reading_a_source(tmp_path: Path) -> None:
+    from experiments.compare import compare
+    from lms200.errors import InputError
+
+    # they were dropped without a word: the run went on the defaults of every method it ran
+    with pytest.raises(InputError, match=r"^params: 'iepf' is not among the methods run \(sensor\); give parameters "
+                                         r"only for a method in methods$"):
+        compare([str(tmp_path / "absent.clf")], ["sensor"], params={"iepf": {"split_threshold": 0.05}})
+
+
 def test_compare_still_takes_a_generator_of_sources() -> None:
     from experiments.compare import compare, sim_source
 

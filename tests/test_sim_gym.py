@@ -73,3 +73,25 @@ def test_following_the_path_earns_progress_and_a_wall_ends_it() -> None:
     assert terminated and reward < COLLISION_REWARD + 1
     assert env.world.clearance(info["pose"][None, :2])[0] < env.limits.radius
     env.close()
+
+
+@pytest.mark.parametrize("world, length", [("office", 5.0), ("corridor", 60.0)])
+def test_path_length_m_is_the_planned_paths_length_in_metres(world: str, length: float) -> None:
+    """It was taken as a tour of path_length_m / v_max seconds, planned 5 m longer and to the end of its
+    last leg: office 5 m gave a 12.9 m path, the default 60 m one of 66.7 m. The path is the start of
+    the route robot_tour drives (the independent reference), cut on its last edge."""
+    from sim import make_world, robot_tour
+
+    env = OfficeEnv(world=world, world_seed=2, path_length_m=length)
+    arc = np.hypot(*np.diff(env.path, axis=0).T)
+    assert arc.sum() == pytest.approx(length, abs=1e-9)
+    _, info = env.reset(seed=0)
+    assert info["path_length_m"] == pytest.approx(length, abs=1e-9)
+    env.close()
+    route = robot_tour(make_world(world, 2), 2, duration=length / 0.5).waypoints
+    route = route[np.concatenate(([True], np.hypot(*np.diff(route, axis=0).T) > 1e-9))]
+    k = len(env.path) - 1
+    assert np.array_equal(env.path[:k], route[:k])
+    end = env.path[k] - route[k - 1]  # on the route's next edge, short of its end
+    edge = route[k] - route[k - 1]
+    assert abs(end[0] * edge[1] - end[1] * edge[0]) < 1e-9 and 0 < end @ edge <= edge @ edge

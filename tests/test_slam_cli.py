@@ -244,6 +244,39 @@ def test_a_ground_truth_beside_none_of_the_scans_is_refused_before_the_run(sim_f
     assert not (tmp_path / "o").exists()
 
 
+def test_relations_beside_none_of_the_scans_are_refused_before_the_run(sim_folder, tmp_path, capsys):
+    """Another log's relations (MIT CSAIL's given with the Intel log) ran the whole SLAM, warned "the
+    relations error covers 0 of the file's 1172 relations" and wrote metrics.json with no relations
+    score, exit 0. Refused before any output, naming the file and both time spans; relations over part
+    of the scans, or past a --max-scans cut, still run (the run's own warning says how many it scored)."""
+    from experiments.cli import main
+    from experiments.slamrun import load_input
+
+    def relations(name: str, *pairs: tuple[float, float]) -> Path:
+        path = tmp_path / name
+        path.write_text("".join(f"{a} {b} 0.1 0 0 0 0 0.01\n" for a, b in pairs))
+        return path
+
+    other = relations("other.relations", (100.0, 100.5), (101.0, 102.0))
+    assert main(["slam", str(sim_folder), "--relations", str(other), "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and re.fullmatch(
+        rf"lmsbench slam: error: {re.escape(str(other))}: none of its 2 relations lies within the scans' time span: "
+        r"the relations span 100\.000000 to 102\.000000 s, the log's 22[0-9] scans to run on 0\.000000 to 5\.9[0-9]+ s; "
+        r"the relations error would score nothing \(the relations of another log, or stamps of another clock\?\)", err[0]), err
+    assert not (tmp_path / "o").exists()
+    # one pair inside, or past the cut of --max-scans: read (the run's warning says what it scores)
+    assert load_input(sim_folder, relations("part.relations", (1.0, 1.5), (100.0, 101.0))).relations.shape == (2, 5)
+    assert load_input(sim_folder, relations("later.relations", (4.0, 4.5)), max_scans=5).relations.shape == (1, 5)
+    from lms200 import Record, Scan
+
+    log = tmp_path / "late.clf"  # scans from 10 s on
+    write_log(log, [Record(Scan.lms200(np.full(361, 2.0 + 0.01 * k), stamp=10.0 + 0.1 * k)) for k in range(8)])
+    with pytest.raises(LmsbenchError, match=r"relations span 1\.000000 to 2\.000000 s, the 5 scans read \(at most 5, "
+                                            r"--max-scans\) 10\.000000 to 10\.400000 s"):  # before the scans: not the log's
+        load_input(log, relations("before.relations", (1.0, 2.0)), max_scans=5)
+
+
 @pytest.mark.parametrize("content, held", [("", "an empty file (0 bytes)"),
                                            ("# timestamp x y z qx qy qz qw\n\n", "holds only blank or comment lines (2)")])
 def test_a_ground_truth_of_no_poses_is_refused_before_the_run(sim_folder, tmp_path, capsys, content, held):

@@ -218,7 +218,7 @@ def test_interpolation_takes_the_short_way_round():
     (lambda t: align_2d(t[:3, 1:3], t[:4, 1:3]), r"est_xy and true_xy: must hold one point each .*got 3 and 4"),  # matmul ValueError
     (lambda t: align_2d(t[:0, 1:3], t[:0, 1:3]), r"est_xy: has no points"),  # an alignment of nan, RuntimeWarnings
     (lambda t: align_2d(t[:, 1:3], np.where(np.arange(2) == 0, np.nan, t[:, 1:3])), r"true_xy: must be finite .*row 0"),  # LinAlgError
-    (lambda t: align_2d(t[:, 1:3], t[:, 1:3] + 1e300), r"true_xy: row 0: x or y beyond \+-1e\+09 m"),
+    (lambda t: align_2d(t[:, 1:3], t[:, 1:3] + 1e300), r"^true_xy: row 0: x and y must be within \+-1e\+09 m, got \(1e\+300, 1e\+300\) m$"),
 ])
 def test_metrics_name_a_bad_argument(call, message: str) -> None:
     """InputError, or ConfigError for the numbers (features.baselines.checks.positive): both are

@@ -121,6 +121,27 @@ def test_numbers_yaml_1_1_reads_otherwise_are_refused_at_their_key_and_line(text
     assert load(text.replace(value, f"'{value}'")) is not None  # quoted: text
 
 
+UNDERFLOW = "is below float64's smallest nonzero number (4.9e-324) and would be read as 0; write 0 for zero"
+
+
+@pytest.mark.parametrize("text, message", [
+    ("noise_sigma: 1e-400\n", f"line 1, column 14: key 'noise_sigma': 1e-400 {UNDERFLOW}"),
+    ("sensor:\n  noise_sigma: -2.5E-999\n", f"line 2, column 16: key 'noise_sigma': -2.5E-999 {UNDERFLOW}"),
+    ("grid:\n  sensor.noise_sigma: [0.01, .1e-330]\n", f"line 2, column 30: key 'sensor.noise_sigma', item 2: .1e-330 "
+                                                      f"{UNDERFLOW}"),
+    ("x: !!float 1e-400\n", f"line 1, column 4: key 'x': 1e-400 {UNDERFLOW}"),
+])
+def test_a_nonzero_float_that_underflows_to_0_is_refused_at_its_key_and_line(text: str, message: str) -> None:
+    """``noise_sigma: 1e-400`` read as 0.0 without a word: a noise-free run. A zero written as one
+    (0e-400, 0.0e-5) and a subnormal float64 holds (5e-324) read as before."""
+    from lms200.yamlio import Malformed
+
+    with pytest.raises(Malformed) as info:
+        load(text)
+    assert str(info.value) == message
+    assert load("a: 0e-400\nb: -0.0e-5\nc: 5e-324\nd: 1e-300\n") == {"a": 0.0, "b": 0.0, "c": 5e-324, "d": 1e-300}
+
+
 def test_numbers_read_as_before() -> None:
     """Every number YAML 1.2 and YAML 1.1 read alike reads as it did: ints, floats with or
     without a dot or exponent, hexadecimal and binary, infinities and nan; and text that only

@@ -18,7 +18,7 @@ from lms200.yamlio import dump as dump_yaml
 from experiments.overrides import check_set_once, set_option
 from experiments.logargs import add_log_options, given_log_flags, plain_log_options, read_log_options, report_skipped
 from experiments.options import (WORLDS, COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, OutTree, check_sim2real_finished, SIMULATE_OUTPUTS, listed_seed, InputError, check_methods, check_out,
-                                 check_out_spares, check_seeds, count, plain_number, path_arg, scan_rate, text)
+                                 Underflow, check_out_spares, check_seeds, count, plain_number, path_arg, scan_rate, text)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -98,6 +98,8 @@ def _sigma(text: str) -> float | str:
         return text
     try:
         value = plain_number(text)
+    except Underflow as exc:
+        raise argparse.ArgumentTypeError(f"--sigma takes metres or 'auto', got {text!r}: {exc}") from None
     except ValueError:
         raise argparse.ArgumentTypeError(f"--sigma takes metres or 'auto', got {text!r}") from None
     from experiments.compare import sigma_problem

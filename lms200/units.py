@@ -1,0 +1,127 @@
+"""Ranges in millimetres given as metres: told from a source's first scans, once per source.
+
+A ``Scan``'s ranges are metres, and a reading beyond ``range_max`` is no return (REP-117). Ranges
+written in millimetres (a user's array, a log or bag written so) lie about 1000x too far: every
+one beyond ``range_max``, so every beam reads as no return, no extractor finds a line, and nothing
+said why. :func:`units_problem` tells such scans from open space by what their readings would be
+in metres, divided by 1000; the log readers (``lms200.carmen``, ``lms200.bag``) and the drivers
+(``experiments.compare.compare``, ``slam.run_slam``'s first scan) warn with it, once per pass or
+run, never per scan of an extraction.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from typing import Iterable, Iterator
+
+import numpy as np
+
+from .errors import LmsbenchWarning
+from .records import Record
+from .scan import Scan
+
+#: scans of a source's start that are looked at (a log's first 50; all of a shorter one)
+UNITS_SCANS = 50
+#: finite readings > 0 the rule needs before it says anything (a scan or two of a few beams says nothing)
+MIN_READINGS = 10
+#: readings of different values the rule needs: a no-return code (81.91 in a cm-mode CARMEN log, the
+#: range_max + 1 some drivers write) is one value, however many beams hold it
+MIN_DISTINCT = 3
+#: m: the nearest reading, once divided by 1000, that a scene in millimetres is taken to hold; the far
+#: readings (10-30 m) of a scanner whose range_max was set below its reach lie below it (0.01-0.03 m)
+NEAREST_SCENE_M = 0.1
+#: share of the readings that must lie within [max(range_min, NEAREST_SCENE_M), range_max] once divided
+#: by 1000 (not all: the LMS200's no-return code in mm mode, 8191 mm, divides to 8.191 m, past 8.183)
+IN_RANGE_SHARE = 0.9
+
+
+class RangeUnitsWarning(LmsbenchWarning):
+    """A source's first scans look like ranges in millimetres given as metres (:func:`units_problem`)."""
+
+
+class _Tally:
+    """What :func:`units_problem` asks of a source's first scans, added up scan by scan (no scan is
+    held: a pass's first 50 scans of 10,000 beams each held 4 MB, and their joined copies 18 MB)."""
+
+    def __init__(self) -> None:
+        self.scans = self.readings = self.in_range = 0
+        self.valid = False  # a valid beam in some scan: no doubt left
+        self.within = False  # a reading > 0 at or below its range_max (below range_min: not valid, not far either)
+        self.least = self.most = math.nan  # the smallest and largest reading
+        self.range_max = math.inf  # the smallest range_max
+        self.values: set[float] = set()  # up to MIN_DISTINCT of the readings' values
+
+    def add(self, scan: Scan) -> None:
+        self.scans += 1
+        if self.valid:
+            return
+        ranges = np.asarray(scan.ranges, dtype=float).ravel()
+        lo, hi = float(scan.range_min), float(scan.range_max)
+        with np.errstate(invalid="ignore"):
+            r = ranges[np.isfinite(ranges) & (ranges > 0.0)]
+        if not r.size:
+            return
+        self.valid = bool(np.any((r >= lo) & (r <= hi)))
+        self.within = self.within or bool(np.any(r <= hi))
+        self.readings += int(r.size)
+        metres = r / 1000.0
+        self.in_range += int(np.count_nonzero((metres >= max(lo, NEAREST_SCENE_M)) & (metres <= hi)))
+        self.least, self.most = float(np.fmin(self.least, r.min())), float(np.fmax(self.most, r.max()))
+        self.range_max = min(self.range_max, hi)
+        if len(self.values) < MIN_DISTINCT:
+            self.values.update(np.unique(r)[:MIN_DISTINCT].tolist())
+
+    def problem(self) -> str | None:
+        if self.valid or self.within or self.readings < MIN_READINGS or len(self.values) < MIN_DISTINCT:
+            return None
+        share = self.in_range / self.readings
+        if share < IN_RANGE_SHARE:
+            return None
+        return (f"none of the first {self.scans} scans has a valid beam: all {self.readings:,} finite readings lie "
+                f"beyond range_max ({self.range_max:g} m), from {self.least:.6g} to {self.most:.6g}, and "
+                f"{100 * share:.0f} % of them would be in range divided by 1000: ranges in millimetres given as "
+                "metres? A Scan's ranges are metres (a reading beyond range_max is no return, REP-117)")
+
+
+def units_problem(scans: Iterable[Scan]) -> str | None:
+    """Why ``scans`` (a source's first ones) look like ranges in millimetres given as metres, or None.
+
+    They do when none has a valid beam, they hold at least MIN_READINGS finite readings > 0 of at
+    least MIN_DISTINCT values, every one beyond its scan's ``range_max``, and at least IN_RANGE_SHARE
+    of them divided by 1000 lie within [max(range_min, NEAREST_SCENE_M), range_max]: a scene in
+    metres. Open space (REP-117: beyond ``range_max`` is no return) is not: a no-return code is one
+    value, +inf is no finite reading, and real readings beyond a ``range_max`` set short lie within a
+    few tens of metres, below NEAREST_SCENE_M once divided; any valid beam in any scan ends the doubt.
+    The scans are looked at one by one, none held."""
+    tally = _Tally()
+    for scan in scans:
+        tally.add(scan)
+    return tally.problem()
+
+
+def warn_units(scans: Iterable[Scan], where: str) -> None:
+    """A :class:`RangeUnitsWarning` naming ``where`` (a log's path, a source's name) when
+    :func:`units_problem` finds ``scans`` in millimetres (once a process for one text, under Python's
+    default warning filter: a log read twice, for its noise and its scans, is said once)."""
+    _warn(units_problem(scans), where)
+
+
+def _warn(problem: str | None, where: str) -> None:
+    if problem:  # issued here, whoever reads: Python's default filter says one text once, not once a pass
+        warnings.warn(f"{where}: {problem}", RangeUnitsWarning, stacklevel=1)
+
+
+def units_watched(records: Iterable[Record], where: str) -> Iterator[Record]:
+    """``records`` as they come, their first UNITS_SCANS scans (all of a pass with fewer, once it
+    ends) looked at by :func:`units_problem`, one by one (none held), and said by :func:`warn_units`:
+    a reader's pass warns once, and a pass stopped before then does not."""
+    tally = _Tally()
+    for rec in records:
+        if tally.scans < UNITS_SCANS:
+            tally.add(rec.scan)
+            if tally.scans == UNITS_SCANS:
+                _warn(tally.problem(), where)
+        yield rec
+    if tally.scans < UNITS_SCANS:
+        _warn(tally.problem(), where)

@@ -1,0 +1,65 @@
+"""Ranges in millimetres given as metres (lms200.units): every reading beyond range_max, so every
+beam read as no return and no line found, without a word. Told from a source's first scans by the
+log readers and compare; open space (REP-117: beyond range_max is no return) is not taken for it."""
+
+from __future__ import annotations
+
+import itertools
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from lms200 import Record, Scan, read_log, write_log
+from lms200.units import RangeUnitsWarning, units_problem
+
+
+def _room_mm(n: int = 3) -> list[Scan]:
+    """An office's ranges, 2-5 m, written in millimetres."""
+    rng = np.random.default_rng(0)
+    return [Scan.lms200(1000.0 * (2.0 + rng.uniform(0.0, 3.0, 361)), stamp=0.1 * k) for k in range(n)]
+
+
+def test_scans_in_millimetres_are_told_and_open_space_is_not() -> None:
+    said = units_problem(_room_mm())
+    assert said == ("none of the first 3 scans has a valid beam: all 1,083 finite readings lie beyond range_max (8.183 m), "
+                    "from 2000.57 to 4998.5, and 100 % of them would be in range divided by 1000: ranges in millimetres "
+                    "given as metres? A Scan's ranges are metres (a reading beyond range_max is no return, REP-117)")
+    in_metres = [s.replace(ranges=s.ranges / 1000.0) for s in _room_mm()]
+    assert all(s.valid.all() for s in in_metres) and units_problem(in_metres) is None
+    quiet = {
+        "open space, +inf": [Scan.lms200(np.full(361, np.inf))],
+        "a no-return code (81.91 m) beyond a cm scanner's 81.83": [Scan.lms200(np.full(361, 81.91), range_max=81.83)],
+        "far readings past a range_max set short": [Scan.lms200(np.linspace(10.0, 30.0, 361))],
+        "one valid beam": [Scan.lms200(np.r_[2.0, _room_mm(1)[0].ranges[1:]])],
+        "too few readings": [Scan.lms200(np.r_[np.linspace(2000, 3000, 9), np.full(352, np.inf)])],
+        "no scan": [],
+    }
+    for why, scans in quiet.items():
+        assert units_problem(scans) is None, why
+
+
+def test_a_log_in_millimetres_is_said_once_a_pass_by_its_reader(tmp_path: Path) -> None:
+    log = tmp_path / "mm.clf"
+    write_log(log, [Record(s) for s in _room_mm(60)])
+    with pytest.warns(RangeUnitsWarning, match=rf"^{log}: none of the first 50 scans has a valid beam: .* millimetres"):
+        assert sum(1 for _ in read_log(log)) == 60
+    with warnings.catch_warnings():  # a pass stopped before its 50th scan says nothing
+        warnings.simplefilter("error", RangeUnitsWarning)
+        assert len(list(itertools.islice(read_log(log), 10))) == 10
+
+
+def test_compare_says_it_of_scans_of_the_users_own() -> None:
+    from experiments.compare import Source, compare
+
+    records = [Record(s) for s in _room_mm()]
+    with pytest.warns(RangeUnitsWarning, match=r"^mine: none of the first 3 scans has a valid beam"):
+        table = compare([Source.from_records(records, name="mine")], ["split_merge"], sigma=0.01)
+    assert table.n_lines.sum() == 0 and table.n_valid.sum() == 0  # what it says: no beam read, no line found
+
+
+@pytest.mark.shared_data
+def test_no_real_log_is_taken_for_millimetres(shared_data: Path) -> None:
+    for log in sorted(shared_data.glob("*.gz")):
+        assert units_problem([rec.scan for rec in itertools.islice(read_log(log), 50)]) is None, log.name
