@@ -628,7 +628,13 @@ class _WatchedStdout:
 
     def write(self, text: str) -> int:
         try:
-            return self.stream.write(text)
+            try:
+                return self.stream.write(text)
+            except UnicodeEncodeError:  # a name that is not UTF-8 (os.fsdecode's lone surrogates) on a stream
+                # that takes only its encoding (stdout is strict under en_US.UTF-8): written with escapes,
+                # as stderr writes them (a TextIOWrapper encodes the whole text before it writes any)
+                encoding = getattr(self.stream, "encoding", None) or "utf-8"
+                return self.stream.write(text.encode(encoding, "backslashreplace").decode(encoding))
         except BrokenPipeError:
             raise
         except OSError as exc:

@@ -41,7 +41,7 @@ from lms200.logs import SIMULATE_LOG
 from lms200.noise import QUANTUM_CANDIDATES_M
 
 from experiments.options import known_worlds, load_simulate_config, real_path  # sim.WORLD_NAMES, the simulator imported when first asked
-from experiments.provenance import printable
+from lms200.finite import printable
 
 
 @dataclass
@@ -346,7 +346,8 @@ def check_sources(specs: Sequence[str], read_options: dict[str, Any] | None = No
         where = "world" if world else str(real_path(spec))
         first = kinds.setdefault(label, (spec, where))
         if first[1] != where:
-            raise LmsbenchError(f"{first[0]} and {spec} would both be reported as {label!r} (compare names a "
+            escaped = "" if world or label == Path(spec).name else ", a name that is not UTF-8, shown escaped"
+            raise LmsbenchError(f"{first[0]} and {spec} would both be reported as '{label}'{escaped} (compare names a "
                                 "source by its world, folder or file name): give one of them another name, "
                                 "e.g. a link")
         for s in (([int(seed)] if colon else list(seeds)) if world else [None]):

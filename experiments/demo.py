@@ -19,6 +19,7 @@ from experiments.figures.tables import panels_log_name
 from experiments.options import DEMO_OUTPUTS, DEMO_OWNER, FIGURE_PART_FILES
 from experiments.report import Section, figure, markdown_table, write_report
 from lms200.errors import LmsbenchWarning
+from lms200.finite import printable
 
 #: The demo's sweep: window size k of the paper's extractor against range noise (a few seconds).
 DEMO_SWEEP = {
@@ -202,8 +203,15 @@ def at_a_glance(tables: dict[str, pd.DataFrame]) -> list[str]:
 def demo_command(cfg: StudyConfig, executor: str = "local") -> str:
     """The ``lmsbench demo`` command line that runs this study again (the options that differ from
     the defaults; ``executor`` "" for ``--no-sweep``). The report said `lmsbench demo` whatever
-    the world, seed or log it ran."""
+    the world, seed or log it ran. A word that is not UTF-8 (a log's name with an undecodable byte)
+    is written in the shell's ANSI-C quotes, ``$'b\\xff.clf'``, which name that file again."""
     import shlex
+
+    def shell_word(word: str) -> str:
+        if printable(word) == word:
+            return shlex.quote(word)
+        raw = os.fsencode(word)  # the name's bytes, as the file system holds them
+        return "$'" + "".join(chr(b) if 32 <= b < 127 and b not in b"'\\" else f"\\x{b:02x}" for b in raw) + "'"
 
     from experiments.figures.study import INTEL_LOG
     from experiments.logargs import log_option_flags
@@ -219,7 +227,7 @@ def demo_command(cfg: StudyConfig, executor: str = "local") -> str:
         words += ["--log", str(cfg.intel_log)]
     words += log_option_flags(cfg.log_options)
     words += ["--no-sweep"] if not executor else (["--inprocess"] if executor == "inprocess" else [])
-    return shlex.join(words)
+    return " ".join(shell_word(word) for word in words)
 
 
 def report_sections(tables: dict[str, pd.DataFrame], notes: list[str], cfg: StudyConfig, figs: dict,

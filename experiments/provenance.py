@@ -14,6 +14,8 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any, Callable, Iterator, Sequence
 
+from lms200.finite import printable
+
 #: Distributions whose version can change a result.
 PACKAGES = ("lmsbench", "numpy", "scipy", "numba", "pybullet", "pandas", "filterpy", "gtsam", "matplotlib")
 
@@ -118,13 +120,6 @@ def write_record(path: str | os.PathLike, content: str | Callable[[Path], object
         return write_whole(path, content)
     text = printable(content)  # sim2real's report.md of a log under b<0xff>/ failed after the whole run
     return write_whole(path, lambda tmp: tmp.write_text(text, encoding="utf-8"))
-
-
-def printable(text: str) -> str:
-    """``text`` with each lone surrogate (an undecodable byte of a path, as ``os.fsdecode`` gives it)
-    written as its escape (``\\udcff``), as stderr shows it: UTF-8 (a report, a table's text column,
-    a figure's title) cannot hold one, and a run on ``b<0xff>.clf`` failed after its work."""
-    return text.encode("utf-8", "backslashreplace").decode("utf-8")
 
 
 def write_parquet(table: Any, path: str | os.PathLike) -> None:

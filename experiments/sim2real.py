@@ -42,7 +42,7 @@ from lms200.calibration import missing_readings
 from lms200.yamlio import dump as dump_yaml
 
 from experiments.logargs import report_skipped
-from experiments.provenance import printable
+from lms200.finite import printable
 
 if TYPE_CHECKING:
     import pandas as pd

@@ -27,6 +27,7 @@ import numpy as np
 
 from lms200 import Record
 from lms200.carmen import write_carmen
+from lms200.finite import printable
 from lms200.logs import SIMULATE_LOG
 from lms200.tum import write_tum
 from lms200.yamlio import dump as dump_yaml
@@ -216,7 +217,7 @@ def draw_map(world: World, records: list[Record], path: Path) -> None:
         equal_axes(ax)
     else:
         ax.set_aspect("equal")
-    ax.set_title(f"world {world.name} (seed {world.seed})")
+    ax.set_title(f"world {printable(world.name)} (seed {world.seed})")  # a world file's stem may not be UTF-8
     ax.legend(loc="upper right")
     from experiments.style import savefig  # a full disk its OSError, not matplotlib's cleanup error
 

@@ -16,6 +16,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from experiments.provenance import write_parquet
+
 MIT_LOG = Path(__file__).resolve().parents[2] / "shared" / "data" / "carmen" / "mit-csail.clf.gz"
 
 
@@ -134,14 +136,14 @@ def main(argv: list[str] | None = None) -> int:
     md = []
     if args.mit.exists():
         mit = mit_rows(args.mit, ["paper", "default"])
-        mit.to_parquet(args.out / "mit.parquet", index=False)
+        write_parquet(mit, args.out / "mit.parquet")
         md += [_md(mit), ""]
     if args.long > 0:
         lg = long_run(0, args.long, 37.5)
-        lg.to_parquet(args.out / "long.parquet", index=False)
+        write_parquet(lg, args.out / "long.parquet")
         md += [_md(lg), ""]
     sim = sim_rows(_seeds(args.seeds), [37.5, 5.0], args.duration, ["default"])
-    sim.to_parquet(args.out / "sim.parquet", index=False)
+    write_parquet(sim, args.out / "sim.parquet")
     wide = sim.pivot_table(index="seed", columns="rate_hz", values=["ate_rmse_m", "cpu_scans_per_s"])
     wide.columns = [f"{v} @ {r:g} Hz" for v, r in wide.columns]
     md += [_md(wide.reset_index()), ""]

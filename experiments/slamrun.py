@@ -24,7 +24,8 @@ from lms200.records import Record
 from lms200.yamlio import dump as dump_yaml
 from experiments.options import SLAM_OUTPUTS, SLAM_OWNER, OutTree, check_simulate_finished, not_a_log_folder, simulate_log
 from experiments.progress import say_on_terminal
-from experiments.provenance import printable, write_record
+from experiments.provenance import write_record
+from lms200.finite import printable
 from experiments.user_methods import scans_of
 from slam import SlamConfig, SlamResult, run_slam
 from slam.metrics import Alignment2D, ate, interpolate_poses, map_error, read_relations, relations_error, rpe

@@ -24,6 +24,13 @@ def float_of(value: object, name: str, error: type[Exception]) -> float:
         raise error(f"{name}: must be finite, got {overflow_text(value)}") from None
 
 
+def printable(text: str) -> str:
+    """``text`` with each lone surrogate (an undecodable byte of a path, as ``os.fsdecode`` gives it)
+    written as its escape (``\\udcff``), as stderr shows it: UTF-8 (a report, a YAML header, a table's
+    text column, a figure's title) cannot hold one, and a run on ``b<0xff>.clf`` failed after its work."""
+    return text.encode("utf-8", "backslashreplace").decode("utf-8")
+
+
 def shown(value: object, most: int = 60) -> str:
     """A user's value for a one-line message: its repr on one line (a 2-D array's took two), cut
     to its start and end and its length past ``most`` characters (as the command line's

@@ -24,7 +24,7 @@ import numpy as np
 
 from lms200 import LmsbenchError
 from lms200.errors import InputError, LmsbenchWarning
-from lms200.finite import is_one_of
+from lms200.finite import is_one_of, printable
 from lms200.codes import LMS200_MAX_RANGE, metres_per_unit
 from lms200.laser_geometry import MIN_RANGE_MAX_M
 from lms200.timing import MIRROR_TURN_S, scan_period, turns_per_scan
@@ -297,11 +297,10 @@ class SensorConfig:
     def to_yaml(self, path: str | Path, header: str = "", extra: dict[str, Any] | None = None) -> None:
         """Write the fields as YAML (``header`` as # comment lines, ``extra`` as more sections). A lone
         surrogate in ``header`` (a path's undecodable bytes, as ``os.fsdecode`` gives them) is written
-        as its escape, as YAML writes it in ``extra``: it failed UTF-8's encoding (``lmsbench calibrate``
+        as its escape (``lms200.finite.printable``; YAML writes one in ``extra`` as ``\\uDCFF``): it failed UTF-8's encoding (``lmsbench calibrate``
         of a log under such a folder, an internal error after the whole calibration)."""
 
-        safe = header.encode("utf-8", "backslashreplace").decode("utf-8")
-        lines = "".join(f"# {line}\n" for line in safe.splitlines())
+        lines = "".join(f"# {line}\n" for line in printable(header).splitlines())
         body = dump_yaml(self.to_dict(), sort_keys=False)
         if extra:
             body += dump_yaml(extra, sort_keys=False)

@@ -724,7 +724,6 @@ def test_a_sensor_yaml_with_only_its_calibration_section_is_refused(tmp_path):
     assert SensorConfig.from_yaml(whole).noise_sigma == 0.007
 
 
-
 def test_a_sensor_yaml_header_naming_an_undecodable_path_is_written_and_read_back(tmp_path):
     """`lmsbench calibrate b<0xff>/s.clf` put the log's path (os.fsdecode: lone surrogates) into the
     YAML's comment header, whose UTF-8 write failed: an internal error after the whole calibration."""
@@ -736,6 +735,25 @@ def test_a_sensor_yaml_header_naming_an_undecodable_path_is_written_and_read_bac
                                             extra={"calibration": {"source": source}})
     assert out.read_text(encoding="utf-8").startswith("# lmsbench calibrate b\\udcff/s.clf\n")
     assert SensorConfig.from_yaml(out).noise_sigma == 0.007
+
+
+def test_a_world_named_by_an_undecodable_file_name_titles_its_map(tmp_path):
+    """`simulate --world w<0xff>.json`: a world with no name takes its file's stem, and map.png's title
+    (matplotlib) could not hold its lone surrogate: an internal error, the run left unfinished."""
+    import dataclasses
+    import warnings
+
+    import matplotlib.image
+
+    from experiments.simulation import draw_map
+    from sim import make_world
+
+    world = dataclasses.replace(make_world("corridor", seed=0), name=os.fsdecode(b"w\xff"))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # no scan drawn: an empty legend
+        draw_map(world, [], tmp_path / "map.png")
+    assert matplotlib.image.imread(tmp_path / "map.png").shape[2] in (3, 4)
+
 
 # -- fuzzing of 2026-12-03: the public Python API ------------------------------------------------------
 @pytest.mark.parametrize("field", ["angle_min", "angle_increment", "range_min", "range_max", "stamp"])

@@ -1672,13 +1672,20 @@ def test_a_log_whose_name_is_not_utf8_is_named_by_its_escapes(files, tmp_path, c
     """A log named b<0xff>.clf (os.fsdecode: a lone surrogate): compare's table (pyarrow) and slam's
     figure title (matplotlib) cannot hold its name, and both ended in an internal error after the
     work; sim2real's report.md too. The name is written with its escapes, as stderr shows it."""
-    from experiments.provenance import write_record
+    from experiments.demo import demo_command
+    from experiments.figures.study import StudyConfig
+    from experiments.provenance import read_parquet, write_record
 
     log = tmp_path / os.fsdecode(b"b\xff.clf")
     shutil.copyfile(files["good.clf"], log)
-    assert run_main(["compare", str(log), "--methods", "split_merge", "--format", "csv", "--out",
-                     str(tmp_path / "c")]) == 0
-    assert set(pd.read_csv(tmp_path / "c" / "compare.csv")["source"]) == {"b\\udcff.clf"}
+    out = tmp_path / os.fsdecode(b"c\xfe")  # its Parquet table through a handle; its path on stdout
+    assert run_main(["compare", str(log), "--methods", "split_merge", "--max-scans", "20", "--out", str(out)]) == 0
+    assert set(read_parquet(out / "compare.parquet")["source"]) == {"b\\udcff.clf"}
+    assert run_main(["info", str(log)]) == 0  # the name on stdout, which capsys keeps strict (as en_US.UTF-8)
+    said = capsys.readouterr()
+    assert "b\\udcff.clf" in said.out and "internal error" not in said.err
+    # the demo report's Reproduce line names the file again in the shell's ANSI-C quotes
+    assert demo_command(StudyConfig(intel_log=str(log)), "") == f"lmsbench demo --log $'{tmp_path}/b\\xff.clf' --no-sweep"
     assert run_main(["slam", str(log), "--max-scans", "5", "--no-paper-baseline", "--out", str(tmp_path / "s")]) == 0
     assert "internal error" not in capsys.readouterr().err
     write_record(tmp_path / "r.md", f"# sim2real: {log.name}\n")

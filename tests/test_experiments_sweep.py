@@ -294,6 +294,8 @@ def test_random_draws_that_repeat_are_said_once_with_how_many(tmp_path: Path) ->
         ({"kind": "k", "grid": {"x,y": [[4, True], [4.0, True]]}}, r"^grid.x,y: \[4.0, True\] is given twice"),
         ({"kind": "k", "grid": {"x": [np.int64(3), np.int64(3)]}}, r"^grid.x: 3 is given twice"),  # numpy's: Python's
         ({"kind": "k", "fixed": {"z": np.float64("nan")}}, r"^fixed.z must be finite .* got nan$"),
+        # a file name's undecodable byte (YAML "w\uDCFF.json"): the table's row write failed in pyarrow, an internal error
+        ({"kind": "k", "grid": {"world": ["w\udcff.json"]}}, r"^grid.world: 'w\\udcff.json' is not UTF-8 text"),
     ],
 )
 def test_bad_sweep_files_raise_errors_that_say_what_to_fix(raw, message):

@@ -24,7 +24,8 @@ from experiments.sweep.kinds import align, slam_metrics, true_trajectory
 from experiments.compare import Source, compare, summarise
 from experiments.evaluate import ALL_METHODS, extract_timed, sensor_config, simulate_run, truths_for
 from experiments.user_methods import scans_of
-from experiments.provenance import printable, read_parquet
+from experiments.provenance import read_parquet
+from lms200.finite import printable
 
 from .tables import feature_panels, map_table, pick_evenly, signals_table, trajectory_table
 

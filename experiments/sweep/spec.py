@@ -31,7 +31,7 @@ parameter becomes a column of the result table, under the name written here.
 
 from __future__ import annotations
 
-from lms200.finite import shown
+from lms200.finite import printable, shown
 from lms200.yamlio import SWEEP_SIZE_HINT, load as load_yaml, size_problem
 
 import hashlib
@@ -474,6 +474,9 @@ def _check_scalar(where: str, value: Any) -> None:
     if not isinstance(value, (str, int, float, bool, type(None))):
         hint = " (to vary it, put it under grid:)" if where.startswith("fixed.") and isinstance(value, list) else ""
         raise SweepSpecError(f"{where} must be a number, string, bool or null, got {shown(value, 80)}{hint}")
+    if isinstance(value, str) and printable(value) != value:  # "w\uDCFF.json": a table's text is UTF-8
+        raise SweepSpecError(f"{where}: {shown(value, 80)} is not UTF-8 text (it holds a lone surrogate, "
+                             f"a file name's undecodable byte); a sweep's table holds UTF-8 text: rename the file")
     if isinstance(value, (int, float)) and not _finite(value):
         text = repr(value) if isinstance(value, float) else f"a whole number of {_digits(value)} digits"
         raise SweepSpecError(f"{where} must be finite (within float64's range, +-1.8e308), got {text}")
