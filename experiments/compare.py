@@ -538,7 +538,7 @@ def compare(
         # read whole for its noise (sigma "auto") before compare() refused its scan 0 (the CLI checks it while
         # parsing); checked here, source by source, so that one log is open at a time (first scans taken for
         # every source before the loop kept every log's reader open: 60 logs, "too many open files")
-        src_records = _first_checked(src)
+        src_records = _first_checked(src, max_scans)
         sigma_r = _source_sigma(src, fixed_sigma)
         src_runs = _with_noise(runs, params, _extractor_noise(src, sigma_r), _fit_noise(src), _bearing_noise(src))
         src.ran = {name: cfg for name, _, cfg in src_runs}
@@ -603,18 +603,19 @@ def compare(
     return table
 
 
-def _first_checked(src: Source) -> Iterable[Record]:
+def _first_checked(src: Source, max_scans: int | None = None) -> Iterable[Record]:
     """``src``'s records, its first scan's beams checked (:func:`check_beams`) now, before its range
     noise is estimated; a list of records is left as it is (re-iterable, for that estimate). The
     first scans of a source not read by a log reader (records of the user's, which the readers'
-    check does not see) are checked for ranges in millimetres (``lms200.units``: a warning)."""
+    check does not see) are checked for ranges in millimetres (``lms200.units``: a warning), no more of
+    them than the run takes (``max_scans``, compare's): a user's live stream is not read further for it."""
     from lms200.units import UNITS_SCANS, warn_units
 
     if isinstance(src.records, Sequence):
         if len(src.records):
             check_beams(src.records[0].scan, f"{source_label(src)}: scan 0")
             if src.reader is None:
-                warn_units([rec.scan for rec in src.records[:UNITS_SCANS]], source_label(src))
+                warn_units((rec.scan for rec in itertools.islice(src.records, UNITS_SCANS)), source_label(src))
         return src.records
     it = iter(src.records)
     first = next(it, None)  # a log's records check their beams as read (log_source), naming the log's path
@@ -623,8 +624,9 @@ def _first_checked(src: Source) -> Iterable[Record]:
     check_beams(first.scan, f"{source_label(src)}: scan 0")
     if src.reader is not None:
         return itertools.chain([first], it)
-    head = [first, *itertools.islice(it, UNITS_SCANS - 1)]
-    warn_units([rec.scan for rec in head], source_label(src))
+    most = UNITS_SCANS if max_scans is None else min(UNITS_SCANS, max_scans)
+    head = [first, *itertools.islice(it, most - 1)]
+    warn_units((rec.scan for rec in head), source_label(src))
     return itertools.chain(head, it)
 
 

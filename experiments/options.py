@@ -441,7 +441,8 @@ def _text_head(path: Path, what: str, utf8: bool = True) -> None:
                 head = fh.read(4096)
         except READ_ERRORS as exc:
             raise InputError(f"{path}: broken {kind} file ({exc})") from None
-    problem = head_problem(head, what, packed=False)  # an archive or binary data, compressed or not
+    problem = head_problem(head, what, packed=False, carmen=utf8)  # an archive or binary data, compressed or not;
+    # a CARMEN log where a YAML file is read (a log itself is read with utf8=False)
     if problem:
         raise InputError(f"{path}: {problem}")
     if not utf8:

@@ -294,7 +294,16 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     if truth is not None:  # groundtruth.tum: its scores need it beside the scans (see _check_truth_span)
         _check_truth_span(truth, records, sources["truth"])
     if rel is not None:
-        _check_relations_span(rel, records, sources["relations"], max_scans if len(records) == max_scans else None)
+        try:
+            _check_relations_span(rel, records, sources["relations"], max_scans if len(records) == max_scans else None)
+        except LmsbenchError as exc:
+            if relations:  # given: the user's mistake, said before the run
+                raise
+            # found beside the log, not given: a stale file must not stop the run (there is no option to
+            # leave it out); it scores nothing, so the run goes on without it and says so
+            notes.append(f"{exc} -- found beside the log, not given: the run goes on without it")
+            rel = None
+            del sources["relations"]
     if truth is None and all(r.truth is not None for r in records):
         truth = np.array([(r.scan.stamp, *r.truth) for r in records], float)
         sources["truth"] = f"{log} (TRUEPOS)"

@@ -72,7 +72,7 @@ def underflow_problem(text: str, value: float) -> str | None:
     mantissa = written.lower().split("e", 1)[0]
     if not any(c in "123456789" for c in mantissa):
         return None
-    return f"{written} is below float64's smallest nonzero number (4.9e-324) and would be read as 0; write 0 for zero"
+    return f"{written} rounds to 0 in float64 (its smallest nonzero number is 4.9e-324); write 0 for zero"
 
 
 def overflow_text(value: object) -> str:

@@ -466,20 +466,30 @@ def _unpacked_head(head: bytes, kind: str) -> tuple[bytes, bool]:
     return b"", False
 
 
-def head_problem(head: bytes, what: str, packed: bool = True) -> str | None:
+def head_problem(head: bytes, what: str, packed: bool = True, carmen: bool = True) -> str | None:
     """Why a file whose first bytes are ``head`` is not ``what``, a text file: compressed (unless ``packed``
     is False: the caller reads through it), a compressed CARMEN log (its head's first PEEK_BYTES
-    decompressed bytes say so), an archive, binary; or None. The one wording of the row files'
+    decompressed bytes say so), an archive, binary, a CARMEN log (unless ``carmen`` is False: ``what``
+    is a log); or None. The one wording of the row files'
     readers and of the command line's check of every text file (``experiments.options``)."""
     kind, archive = compression(head) if packed else None, archive_kind(head)
     if kind:
         message = carmen_message(*_unpacked_head(head, kind))
         if message:  # a gzip-compressed MIT CSAIL log given as --relations was told to be decompressed
-            return f"{'an' if kind == 'xz' else 'a'} {kind}-compressed CARMEN log (its line {message[0]} is a {message[1]} message), not {what}"
+            return carmen_log_problem(*message, what, kind)
         return f"{kind}-compressed, not {what} (read as plain text); decompress it first"
     if archive:
         return f"{archive}, not {what}; extract it first"
-    return f"a binary file, not {what}" if b"\x00" in head else None
+    if b"\x00" in head:
+        return f"a binary file, not {what}"
+    message = carmen_message(head) if carmen else None  # a log given as a config or sweep file: it was "not a
+    return carmen_log_problem(*message, what) if message else None  # simulate config (expected a mapping ...)"
+
+
+def carmen_log_problem(line: int, message: str, what: str, packed: str | None = None) -> str:
+    """The one wording of a CARMEN log given where ``what`` is read (``packed``: its compression)."""
+    log = f"{'an' if packed == 'xz' else 'a'} {packed}-compressed CARMEN log" if packed else "a CARMEN log"
+    return f"{log} (its line {line} is a {message} message), not {what}"
 
 
 def row_lines(path: str | Path, p: Path, what: str = "a text file of rows") -> Iterator[tuple[int, str]]:
@@ -508,8 +518,8 @@ def row_lines(path: str | Path, p: Path, what: str = "a text file of rows") -> I
             words = line.split(maxsplit=1) if first else None
             if words and not words[0].startswith("#"):
                 first = False
-                if words[0] in KNOWN_KINDS:  # was "relation rows need 8 numbers (...), got 5" of a log's PARAM line
-                    raise LogFormatError(path, None, f"a CARMEN log (its line {no} is a {words[0]} message), not {what}")
+                if words[0] in KNOWN_KINDS:  # past the head's lines (a long comment block before it): head_problem's
+                    raise LogFormatError(path, None, carmen_log_problem(no, words[0], what))
             yield no, line
 
 

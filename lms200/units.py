@@ -4,9 +4,9 @@ A ``Scan``'s ranges are metres, and a reading beyond ``range_max`` is no return 
 written in millimetres (a user's array, a log or bag written so) lie about 1000x too far: every
 one beyond ``range_max``, so every beam reads as no return, no extractor finds a line, and nothing
 said why. :func:`units_problem` tells such scans from open space by what their readings would be
-in metres, divided by 1000; the log readers (``lms200.carmen``, ``lms200.bag``) and the drivers
-(``experiments.compare.compare``, ``slam.run_slam``'s first scan) warn with it, once per pass or
-run, never per scan of an extraction.
+in metres, divided by 1000; the log readers (``lms200.carmen``, ``lms200.bag``) and
+``experiments.compare.compare`` (a user's records, which no reader saw) warn with it, once per pass
+or run, never per scan of an extraction (``features.extract`` and ``slam.run_slam`` do not look).
 """
 
 from __future__ import annotations
@@ -80,8 +80,8 @@ class _Tally:
             return None
         return (f"none of the first {self.scans} scans has a valid beam: all {self.readings:,} finite readings lie "
                 f"beyond range_max ({self.range_max:g} m), from {self.least:.6g} to {self.most:.6g}, and "
-                f"{100 * share:.0f} % of them would be in range divided by 1000: ranges in millimetres given as "
-                "metres? A Scan's ranges are metres (a reading beyond range_max is no return, REP-117)")
+                f"{100 * share:.0f} % of them would be in range divided by 1000: ranges in millimetres (or another unit) "
+                "given as metres? A Scan's ranges are metres (a reading beyond range_max is no return, REP-117)")
 
 
 def units_problem(scans: Iterable[Scan]) -> str | None:

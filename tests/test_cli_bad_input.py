@@ -284,12 +284,12 @@ CASES = [
     (["simulate", "--sensor", "{sensor_mm.yaml}", "--out", O], "sensor_mm.yaml: noise_sigma: must be in [0, 0.1] m"),
     # a float written nonzero that float64 reads as 0 ran as 0: a noise-free run, an office with no clutter
     (["simulate", "--sensor", "{sensor_underflow.yaml}", "--out", O], "sensor_underflow.yaml: not valid YAML (line 1, "
-     "column 14: key 'noise_sigma': 1e-400 is below float64's smallest nonzero number (4.9e-324) and would be read as 0; "
+     "column 14: key 'noise_sigma': 1e-400 rounds to 0 in float64 (its smallest nonzero number is 4.9e-324); "
      "write 0 for zero)"),
     (["simulate", "--clutter", "1e-400", "--out", O], "argument --clutter: must be a finite number >= 0 and <= 10 (10x a "
-     "furnished office at most), got '1e-400': 1e-400 is below float64's smallest nonzero number (4.9e-324)"),
+     "furnished office at most), got '1e-400': 1e-400 rounds to 0 in float64 (its smallest nonzero number is 4.9e-324)"),
     (["info", "{good.clf}", "--laser-angle-min-deg", "-1e-999"], "argument --laser-angle-min-deg: got '-1e-999': -1e-999 "
-     "is below float64's smallest"),
+     "rounds to 0 in float64"),
     # a calibrated sensor with its noise in cm (MIT CSAIL's 4.4 mm as 0.44): sim2real compared the log
     # against 0.44 m of noise ("sensor: noise 440.00 mm", largest gap 0.514), exit 0
     (["sim2real", "{good.clf}", "--sensor", "{sensor_cm.yaml}", "--out", O], "sensor_cm.yaml: noise_sigma: must be in [0, "

@@ -275,6 +275,12 @@ def test_relations_beside_none_of_the_scans_are_refused_before_the_run(sim_folde
     with pytest.raises(LmsbenchError, match=r"relations span 1\.000000 to 2\.000000 s, the 5 scans read \(at most 5, "
                                             r"--max-scans\) 10\.000000 to 10\.400000 s"):  # before the scans: not the log's
         load_input(log, relations("before.relations", (1.0, 2.0)), max_scans=5)
+    # found beside the log, not given: a stale file is left out with a note (no option could leave it out)
+    relations("late.relations", (1.0, 2.0))
+    found = load_input(log)
+    assert found.relations is None and "relations" not in found.sources
+    assert any("late.relations: none of its 1 relations" in n and "found beside the log, not given" in n
+               for n in found.notes), found.notes
 
 
 @pytest.mark.parametrize("content, held", [("", "an empty file (0 bytes)"),

@@ -25,7 +25,7 @@ def test_scans_in_millimetres_are_told_and_open_space_is_not() -> None:
     said = units_problem(_room_mm())
     assert said == ("none of the first 3 scans has a valid beam: all 1,083 finite readings lie beyond range_max (8.183 m), "
                     "from 2000.57 to 4998.5, and 100 % of them would be in range divided by 1000: ranges in millimetres "
-                    "given as metres? A Scan's ranges are metres (a reading beyond range_max is no return, REP-117)")
+                    "(or another unit) given as metres? A Scan's ranges are metres (a reading beyond range_max is no return, REP-117)")
     in_metres = [s.replace(ranges=s.ranges / 1000.0) for s in _room_mm()]
     assert all(s.valid.all() for s in in_metres) and units_problem(in_metres) is None
     quiet = {
@@ -43,8 +43,9 @@ def test_scans_in_millimetres_are_told_and_open_space_is_not() -> None:
 def test_a_log_in_millimetres_is_said_once_a_pass_by_its_reader(tmp_path: Path) -> None:
     log = tmp_path / "mm.clf"
     write_log(log, [Record(s) for s in _room_mm(60)])
-    with pytest.warns(RangeUnitsWarning, match=rf"^{log}: none of the first 50 scans has a valid beam: .* millimetres"):
+    with pytest.warns(RangeUnitsWarning, match=rf"^{log}: none of the first 50 scans has a valid beam: .* millimetres") as said:
         assert sum(1 for _ in read_log(log)) == 60
+    assert len([w for w in said if issubclass(w.category, RangeUnitsWarning)]) == 1  # once a pass
     with warnings.catch_warnings():  # a pass stopped before its 50th scan says nothing
         warnings.simplefilter("error", RangeUnitsWarning)
         assert len(list(itertools.islice(read_log(log), 10))) == 10
@@ -57,6 +58,17 @@ def test_compare_says_it_of_scans_of_the_users_own() -> None:
     with pytest.warns(RangeUnitsWarning, match=r"^mine: none of the first 3 scans has a valid beam"):
         table = compare([Source.from_records(records, name="mine")], ["split_merge"], sigma=0.01)
     assert table.n_lines.sum() == 0 and table.n_valid.sum() == 0  # what it says: no beam read, no line found
+    # a stream of the user's is read no further for it than the run takes (max_scans 2: it took 50)
+    pulled = []
+
+    def stream():
+        for rec in records * 30:
+            pulled.append(rec)
+            yield rec
+
+    with pytest.warns(RangeUnitsWarning, match=r"^live: none of the first 2 scans has a valid beam"):
+        compare([Source("live", "log", None, stream(), None, None)], ["split_merge"], sigma=0.01, max_scans=2)
+    assert len(pulled) <= 3
 
 
 @pytest.mark.shared_data

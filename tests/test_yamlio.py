@@ -121,7 +121,7 @@ def test_numbers_yaml_1_1_reads_otherwise_are_refused_at_their_key_and_line(text
     assert load(text.replace(value, f"'{value}'")) is not None  # quoted: text
 
 
-UNDERFLOW = "is below float64's smallest nonzero number (4.9e-324) and would be read as 0; write 0 for zero"
+UNDERFLOW = "rounds to 0 in float64 (its smallest nonzero number is 4.9e-324); write 0 for zero"
 
 
 @pytest.mark.parametrize("text, message", [
