@@ -56,7 +56,8 @@ class LogSummary:
             f"beams per scan  {self.beams}",
             f"field of view   {fixed(self.fov_deg, 2)} deg (from {fixed(self.angle_min_deg, 2)} deg){self._first}",
             f"resolution      {fixed(self.resolution_deg, 3)} deg{self._first}",
-            f"scan rate       {fixed(self.scan_rate_hz, 2)} scans/s",
+            "scan rate       " + (f"{fixed(self.scan_rate_hz, 2)} scans/s" if self.scan_rate_hz > 0 else
+                                  "unknown (one scan)" if self.scans < 2 else "unknown (every scan stamped alike)"),
             f"duration        {fixed(self.duration_s, 2)} s",
             f"no return (inf) {100 * self.no_return_fraction:.2f} % of readings",
             f"invalid         {100 * self.invalid_fraction:.2f} % of readings (nan, -inf, 0 or out of limits)",

@@ -58,6 +58,9 @@ def test_info_json_numbers_are_numbers(tmp_path: Path, capsys: pytest.CaptureFix
     assert info["scans"] == 4 and info["beams"] is None and (info["beams_min"], info["beams_max"]) == (181, 361)
     assert info["duration_s"] == pytest.approx(1.5) and info["scan_rate_hz"] == pytest.approx(2.0)
     assert info["stamps_back"] == 0
+    write_log(tmp_path / "alike.clf", [Record(s.replace(stamp=2.0)) for s in scans[:3]])  # it said "0.00 scans/s"
+    assert main(["info", str(tmp_path / "alike.clf")]) == 0
+    assert "scan rate       unknown (every scan stamped alike)\n" in capsys.readouterr().out
     write_log(tmp_path / "back.clf", [Record(s.replace(stamp=t)) for s, t in zip(scans[:3], (0.0, 1.0, 0.5))])
     assert main(["info", str(tmp_path / "back.clf")]) == 0
     assert "time order      1 scan stamped before the previous one (slam needs --skip-bad-lines)" in capsys.readouterr().out
