@@ -835,7 +835,7 @@ def test_a_user_cells_metric_named_as_the_runners_inputs_record_is_refused():
 
 @pytest.mark.parametrize("metrics, said", [
     ({"m": 10**30}, "ValueError: cell kind 'mysw:cell' returned metric 'm' as a whole number of 31 digits, beyond "
-                    "int64's range (+-9.2e18) that a sweep's table holds; return it as a float ("),
+                    "int64's range (+-9.2e18) that a sweep's table holds (a float holds it: 1e+30) ("),
     ({"m": [1, 2]}, "TypeError: cell kind 'mysw:cell' returned metric 'm' as list, not a scalar (a number, text, a bool "
                     "or None): a sweep's table holds one value a cell ("),
     ({"a/b\n": 1.0}, "ValueError: cell kind 'mysw:cell' returned a metric named 'a/b\\n': a metric's name is printable "
@@ -869,7 +869,7 @@ def test_a_cells_metric_its_table_cannot_hold_fails_the_cell(metrics, said):
                                    "error, elapsed_s, cell), which would overwrite its values; name it otherwise"),
     ({"fixed": {"cell": 1}, "grid": {"a": [1, 2]}}, "parameter(s) ['cell'] named as a column the runner writes"),
     ({"grid": {"a": [1, 10**30]}}, "grid.a: a whole number of 31 digits, beyond int64's range (+-9.2e18) that a "
-                                   "sweep's table holds; write it as a float (1e+30)"),
+                                   "sweep's table holds (a float holds it: 1e+30)"),
     ({"grid": {"a,b": [[1, 2**63]]}}, "grid.a,b: a whole number of 19 digits, beyond int64's range"),
 ])
 def test_a_parameter_the_table_cannot_hold_is_refused(raw, said):
@@ -879,6 +879,25 @@ def test_a_parameter_the_table_cannot_hold_is_refused(raw, said):
     with pytest.raises(SweepSpecError, match="^" + re.escape(said)):
         SweepSpec.from_dict({"name": "t", "kind": "mysw:cell", **raw})
     assert SweepSpec.from_dict({"name": "t", "kind": "mysw:cell", "grid": {"a": [-2**63, 2**63 - 1]}}).cells()
+
+
+def test_the_int64_bound_is_one_check_said_in_one_wording():
+    """A grid value, a random int's bound and a cell's metric beyond int64 are refused by one check with one
+    wording (spec.table_int_problem): the spec said "write it as a float", the cells "return it as a float"
+    (without the float), the random draws "[-2**63, 2**63 - 1] (64-bit integers)", each its own bound test."""
+    from experiments.sweep.cells import run_cell
+    from experiments.sweep.spec import table_int_problem
+
+    said = table_int_problem(-(2**63) - 1)
+    assert said == ("a whole number of 19 digits, beyond int64's range (+-9.2e18) that a sweep's table holds (a float "
+                    "holds it: -9.22337e+18)")
+    assert [table_int_problem(v) for v in (2**63 - 1, -(2**63), np.int64(5), True, 1e30)] == [None] * 5
+    with pytest.raises(SweepSpecError, match="^" + re.escape(f"grid.a: {said}") + "$"):
+        SweepSpec.from_dict({"name": "t", "kind": "mysw:cell", "grid": {"a": [-(2**63) - 1]}})
+    with pytest.raises(SweepSpecError, match="^" + re.escape(f"random.a: int's bound is {said}") + "$"):
+        SweepSpec.from_dict({"name": "t", "kind": "mysw:cell", "random": {"a": {"int": [-(2**63) - 1, 0]}}, "samples": 1})
+    row = run_cell("mysw:cell", {"x": 1}, lambda params: {"m": -(2**63) - 1})
+    assert row["error"].startswith(f"ValueError: cell kind 'mysw:cell' returned metric 'm' as {said} ("), row
 
 
 def test_figures_refuse_a_sweep_metric_named_as_no_file_can_be():
