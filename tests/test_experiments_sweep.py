@@ -1170,3 +1170,18 @@ def test_a_finished_sweeps_table_is_taken_as_its_sweep_yamls_cells(tmp_path: Pat
         warnings.simplefilter("ignore")  # repeated random draws
         run_sweep(spec, tmp_path / "s", "inprocess", progress=False)
     assert check_sweep_results(tmp_path / "s") == tmp_path / "s"
+
+
+@pytest.mark.parametrize("options", [["--workers", "3", "--inprocess"], ["--scheduler", "bogus:x"]])
+def test_a_bad_option_of_a_sweep_of_an_old_spelling_is_its_error_alone(tmp_path, capsys, options):
+    """``sweep S.yaml --workers 3 --inprocess`` with an old spelling in S.yaml said the spelling's warning
+    (the file is read first), then the option's error: a user error is one line, the error alone."""
+    from experiments.cli import main
+
+    path = tmp_path / "old.yaml"
+    path.write_text("name: old\nkind: extract\nfixed: {method: sensor, world: office, duration: 1.0}\n"
+                    "grid: {sensor.resolution_deg: [0.5, 1.0]}\nseeds: [0]\n")
+    assert main(["sweep", str(path), "--out", str(tmp_path / "o"), *options]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("lmsbench sweep: error: "), err
+    assert not (tmp_path / "o").exists()

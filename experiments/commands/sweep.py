@@ -33,6 +33,16 @@ def run(args: argparse.Namespace) -> int:
     from experiments.sweep import SweepSpecError, load_sweep, run_sweep
     from experiments.sweep.runner import spec_record
 
+    executor = "inprocess" if args.inprocess else (args.scheduler if args.scheduler is not None else "local")
+    if args.workers is not None and executor != "local":  # it was ignored
+        instead = "--inprocess runs in this process" if args.inprocess else "--scheduler has workers of its own"
+        raise InputError(f"--workers sets the processes of the local cluster; {instead}")
+    args.workers = args.workers or 2
+    from experiments.sweep.runner import check_executor, check_spec
+
+    check_executor(executor, args.workers)  # a --scheduler that is no address
+    # the options first, then the sweep file, whose reading may warn (an old spelling): `--workers 3 --inprocess`
+    # said that warning, then its error (a user error is one line)
     check_yaml(args.sweep, "a sweep file", size_hint=SWEEP_SIZE_HINT)
     spec = load_sweep(args.sweep)
     out = args.out = args.out or Path("results/sweeps") / spec.name  # named if a reader of stdout that goes away stops it
@@ -43,14 +53,6 @@ def run(args: argparse.Namespace) -> int:
     check_out_spares(out, SWEEP_OUTPUTS.files, [] if own else [args.sweep])
     check_out(out, writes=SWEEP_OUTPUTS, owner=SWEEP_OWNER)
     _check_same_sweep(out, spec.name)
-    executor = "inprocess" if args.inprocess else (args.scheduler if args.scheduler is not None else "local")
-    if args.workers is not None and executor != "local":  # it was ignored
-        instead = "--inprocess runs in this process" if args.inprocess else "--scheduler has workers of its own"
-        raise InputError(f"--workers sets the processes of the local cluster; {instead}")
-    args.workers = args.workers or 2
-    from experiments.sweep.runner import check_executor, check_spec
-
-    check_executor(executor, args.workers)
     try:
         check_spec(spec)
     except SweepSpecError as exc:  # an unknown kind or parameter name
