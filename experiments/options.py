@@ -919,14 +919,15 @@ class Owner:
         tables/trajectory.parquet (which ``figures --tables D/tables`` drew as the new study's Fig. 10),
         and a run stopped while drawing left the earlier run's figures beside its first ones. Call it
         after :func:`check_out` (which refused a file of these names no earlier run wrote). Only the
-        files ``writes`` names exactly go, and those ``also`` names (``sub/name`` or a pattern of
-        them, files the command writes by names a pattern of ``writes`` stands for): a user's file
-        that matches a pattern of an earlier run's folder (``sweep_notes.csv`` beside figures'
-        ``sweep_*``) was removed with them (review of round 10). Returns the names removed
-        (``sub/name`` in sub-folders)."""
-        named = writes.named()
-        earlier = {n for n in (self.earlier(folder, writes) if folder.is_dir() else set())
-                   if n in named or any(fnmatch.fnmatchcase(n, pat) for pat in also)}
+        files ``writes`` names exactly go, and those ``also`` names exactly (``sub/name``: files the
+        command writes by names a pattern of ``writes`` stands for, as the earlier run recorded them,
+        :func:`recorded_names`, or as the command alone names them): a user's file that matches a
+        pattern of an earlier run's folder (``sweep_notes.csv`` beside figures' ``sweep_*``, a
+        ``realdata_notes.csv`` beside compare's ``realdata_*``) was removed with them (review of
+        round 10; ``also`` took patterns until round 11). Returns the names removed (``sub/name`` in
+        sub-folders)."""
+        named = writes.named() | set(also)
+        earlier = {n for n in (self.earlier(folder, writes) if folder.is_dir() else set()) if n in named}
         gone = sorted(n for n in earlier if n not in self.records) + sorted(n for n in earlier if n in self.records)
         gone = [n for n in gone if n not in keep]
         for name in gone:
@@ -939,6 +940,21 @@ class Owner:
                 except OSError:
                     break
         return gone
+
+
+#: The files experiments.style.save_figure writes for a figure of one table: STEM.png, STEM.pdf, STEM.csv.
+FIGURE_ENDS = (".png", ".pdf", ".csv")
+
+
+def recorded_names(record: Path, key: str) -> tuple[str, ...]:
+    """The output files an earlier run listed under ``key`` of its YAML record ``record`` (figures.yaml's
+    ``sweep_plots``, compare's config.yaml ``figures``): what it wrote by names a pattern stands for,
+    listed before it wrote them, so that the next run into the folder removes exactly those
+    (:meth:`Owner.remove_earlier`) and no file of the user's that matches the pattern. () where the
+    record lists none (a folder of a version before these lists: its files of those names stay)."""
+    raw = _yaml_mapping(record) if record.is_file() else None
+    names = raw.get(key) if raw is not None else None
+    return tuple(n for n in names if isinstance(n, str)) if isinstance(names, list) else ()
 
 
 #: What each command's earlier run left that says so (a user's summary.txt or config.yaml in a
