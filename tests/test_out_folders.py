@@ -494,6 +494,16 @@ def test_figures_run_again_removes_the_earlier_runs_files_it_does_not_write(tabl
         # --tables from elsewhere writes no table: tables/ is left as it was
         left = ["notes.txt", "study.yaml", "timing.parquet"] + (["trajectory.parquet"] if argv is redrawn else [])
         assert sorted(p.name for p in (out / "tables").iterdir()) == left
+    # an earlier --sweep run's plots, which its figures.yaml lists, go when a run without --sweep replaces it (they
+    # stayed: README); a user's sweep_mynotes.csv stays
+    sweep = tmp_path / "sw"
+    _finished_sweep(sweep, {"name": "k", "kind": "extract", "grid": {"extractor.k": [3, 5]}})
+    assert main([*redrawn, "--sweep", str(sweep)]) == 0, capsys.readouterr().err
+    plots = ["sweep_k_f1.csv", "sweep_k_f1.pdf", "sweep_k_f1.png"]
+    assert sorted(yaml.safe_load((out / "figures.yaml").read_text())["sweep_plots"]) == plots
+    (out / "sweep_mynotes.csv").write_bytes(b"mine")
+    assert main(redrawn) == 0, capsys.readouterr().err
+    assert sorted(p.name for p in out.iterdir()) == sorted([*figures, "sweep_mynotes.csv", "figures.yaml", "tables"])
 
 
 @pytest.mark.slow
