@@ -1185,3 +1185,31 @@ def test_a_bad_option_of_a_sweep_of_an_old_spelling_is_its_error_alone(tmp_path,
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("lmsbench sweep: error: "), err
     assert not (tmp_path / "o").exists()
+
+
+def test_a_cell_file_whose_parameters_were_edited_is_computed_again(tmp_path):
+    """A resumed sweep took each cell file of a key as that cell finished: a file whose recorded parameters
+    were edited by hand (the key is a hash of the cell's parameters) was read into the table as the cell's
+    row, ``extractor.k=7`` beside metrics computed with 5, "0 computed, 2 already done", without a word.
+    Such a file is computed again now, said in one warning naming it; the other cell is kept."""
+    from experiments.sweep.cells import register_cell
+
+    register_cell("edited_params_test", lambda params: {"y": 10 * params["k"]})
+    spec = SweepSpec.from_dict({"name": "e", "kind": "edited_params_test", "grid": {"k": [3, 5]}})
+    out = tmp_path / "e"
+    first = run_sweep(spec, out, "inprocess", progress=False)
+    cell = first.table.loc[first.table["k"] == 5, "cell"].iloc[0]
+    path = out / "cells" / f"{cell}.parquet"
+    row = pd.read_parquet(path)
+    row["k"] = 7  # edited by hand
+    row.to_parquet(path, index=False)
+    with pytest.warns(LmsbenchWarning, match=re.escape(f"1 cell file records other parameters than the sweep's cell "
+                                                       f"of its name ({cell}.parquet: k=7, not 5: edited by hand); "
+                                                       "computed again")):
+        again = run_sweep(spec, out, "inprocess", progress=False)
+    assert (again.computed, again.skipped) == (1, 1)
+    assert again.table[["k", "y"]].values.tolist() == [[3, 30], [5, 50]]
+    assert pd.read_parquet(path)["k"].tolist() == [5]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a resume of whole, unedited cells says nothing
+        assert run_sweep(spec, out, "inprocess", progress=False).skipped == 2
