@@ -17,9 +17,11 @@ import stat
 import tempfile
 import sys
 import threading
+import warnings
+from contextlib import contextmanager
 from pathlib import Path
 from dataclasses import dataclass, field
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Callable, Iterator, Mapping, Sequence
 
 import yaml
 
@@ -665,6 +667,19 @@ def check_log(path: str | os.PathLike) -> Path:
         raise InputError(f"{p}: empty file, not {what}")
     _text_head(p, what, utf8=False)  # the reader reads ASCII, other bytes replaced
     return p
+
+
+
+@contextmanager
+def warnings_after_checks() -> Iterator[None]:
+    """Hold the warnings raised in the block, a command's checks of its inputs before any work (a sensor
+    or sweep file read in an old spelling), and say them as it ends; a user error in it is its one line
+    alone, the warnings of the run it refused unsaid: `simulate --sensor OLD.yaml --rate-hz 1e9` said the
+    old spelling's warning, then the rate's error (every user error is one line)."""
+    with warnings.catch_warnings(record=True) as held:
+        yield
+    for w in held:
+        warnings.showwarning(w.message, w.category, w.filename, w.lineno, w.file, w.line)
 
 
 SIMULATE_OUTPUTS = (SIMULATE_LOG, *SIMULATE_OTHER_FILES)

@@ -17,7 +17,7 @@ from lms200.yamlio import dump as dump_yaml
 
 from experiments.overrides import check_set_once, set_option
 from experiments.logargs import add_log_options, given_log_flags, plain_log_options, read_log_options, report_skipped
-from experiments.options import (WORLDS, COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, FIGURE_ENDS, OutTree, recorded_names, check_sim2real_finished, SIMULATE_OUTPUTS, listed_seed, InputError, check_methods, check_out,
+from experiments.options import (WORLDS, COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, FIGURE_ENDS, OutTree, recorded_names, warnings_after_checks, check_sim2real_finished, SIMULATE_OUTPUTS, listed_seed, InputError, check_methods, check_out,
                                  check_out_spares, check_seeds, count, plain_number, path_arg, scan_rate, text)
 
 
@@ -140,24 +140,25 @@ def run(args: argparse.Namespace) -> int:
 
     runs = {m: make_config(m, **params.get(m, {})) for m in methods}  # as compare makes them (checked above)
     check_sources(args.sources, read_log_options(args), args.seeds, runs)
-    sensor = None
-    if args.sensor is not None:
-        import sim
+    with warnings_after_checks():  # a refused run is its error alone, without a warning of what it read
+        sensor = None
+        if args.sensor is not None:
+            import sim
 
-        check_sim2real_finished(args.sensor, "--sensor")
-        try:
-            sensor = sim.SensorConfig.from_yaml(args.sensor)
-        except LmsbenchError:
-            raise
-        except (yaml.YAMLError, TypeError, ValueError, KeyError) as exc:
-            raise LmsbenchError(f"{args.sensor}: not a sensor model ({' '.join(str(exc).split())})") from None
-    if world_words(args.sources):  # simulated here, at --rate
-        import sim
+            check_sim2real_finished(args.sensor, "--sensor")
+            try:
+                sensor = sim.SensorConfig.from_yaml(args.sensor)
+            except LmsbenchError:
+                raise
+            except (yaml.YAMLError, TypeError, ValueError, KeyError) as exc:
+                raise LmsbenchError(f"{args.sensor}: not a sensor model ({' '.join(str(exc).split())})") from None
+        if world_words(args.sources):  # simulated here, at --rate
+            import sim
 
-        step = (sensor or sim.SensorConfig()).angle_increment
-        check_scan_rate(args.rate, step, "--rate")
-        for m, cfg in runs.items():  # the simulated scans' step, before any is simulated
-            check_step(cfg, step, m, f"the simulated scans ({args.sensor or 'the default sensor'})")
+            step = (sensor or sim.SensorConfig()).angle_increment
+            check_scan_rate(args.rate, step, "--rate")
+            for m, cfg in runs.items():  # the simulated scans' step, before any is simulated
+                check_step(cfg, step, m, f"the simulated scans ({args.sensor or 'the default sensor'})")
     warm_up_kernels()
     sources = parse_sources(args.sources, args.seeds, args.duration, args.rate, args.stride, args.max_scans,
                             read_options=read_log_options(args), poses=args.poses, sensor=sensor)
