@@ -496,7 +496,7 @@ def _main(argv: Sequence[str] | None, ended: list[_Interrupt] | None = None) -> 
         if _users_code(exc) and os.environ.get("LMSBENCH_TRACEBACK"):
             traceback.print_exception(exc)  # the user's exception first, then where lmsbench called it
         text = _full_disk(exc, getattr(args, "out", None)) or _cwd_gone(exc) or _one_line(exc)
-        print(f"lmsbench {name}: error: {text}{_skip_hint(exc, args)}{_traceback_hint(exc)}", file=sys.stderr)
+        _say(f"lmsbench {name}: error: {text}{_skip_hint(exc, args)}{_traceback_hint(exc)}")
         return 2
     except KeyboardInterrupt:
         return _interrupted(interrupt)
@@ -506,9 +506,9 @@ def _main(argv: Sequence[str] | None, ended: list[_Interrupt] | None = None) -> 
         if os.environ.get("LMSBENCH_TRACEBACK"):
             traceback.print_exception(exc)
         _end_progress_bars()
-        print(f"lmsbench {name}: error: code the command ran called sys.exit({exc.code!r}), which stopped it "
-              "before it finished (a user's extractor or sweep cell kind?"
-              f"{'' if os.environ.get('LMSBENCH_TRACEBACK') else '; LMSBENCH_TRACEBACK=1 shows where'})", file=sys.stderr)
+        _say(f"lmsbench {name}: error: code the command ran called sys.exit({exc.code!r}), which stopped it "
+             "before it finished (a user's extractor or sweep cell kind?"
+             f"{'' if os.environ.get('LMSBENCH_TRACEBACK') else '; LMSBENCH_TRACEBACK=1 shows where'})")
         return 2
     except BaseException as exc:  # a bug, not a user error: say so in one line (GeneratorExit: a traceback)
         if interrupt.timer is not None or _from_interrupt(exc):
@@ -518,8 +518,8 @@ def _main(argv: Sequence[str] | None, ended: list[_Interrupt] | None = None) -> 
         if os.environ.get("LMSBENCH_TRACEBACK"):
             raise
         _end_progress_bars()
-        print(f"lmsbench {name}: internal error: {type(exc).__name__}: {_one_line(exc)} "
-              "(a bug in lmsbench; LMSBENCH_TRACEBACK=1 shows where)", file=sys.stderr)
+        _say(f"lmsbench {name}: internal error: {type(exc).__name__}: {_one_line(exc)} "
+             "(a bug in lmsbench; LMSBENCH_TRACEBACK=1 shows where)")
         return 1
     finally:
         from .options import release_outputs
@@ -573,7 +573,7 @@ def _stdout_gone(name: str, stopped: bool, out: object, started_ns: int = 0) -> 
             left = f"{out} is incomplete: this run wrote {written} file{'s' if written > 1 else ''} there before it stopped"
         else:
             left = f"{out} is incomplete"
-        print(f"lmsbench {name}: stopped: the reader of its standard output went away; {left}", file=sys.stderr)
+        _say(f"lmsbench {name}: stopped: the reader of its standard output went away; {left}")
     return PIPE_CLOSED_STATUS
 
 
@@ -740,6 +740,16 @@ def _show_warning(name: str, previous: Any, message: Warning | str, category: ty
         else:
             print(text, file=sys.stderr)
     except (OSError, ValueError):  # stderr closed: nothing to say it on
+        pass
+
+
+def _say(line: str) -> None:
+    """``line`` on stderr. Where stderr cannot be written (``2>/dev/full``, closed) the line is lost and
+    the command's exit status stands: the OSError of the error's own line came out of its handler, and a
+    user error exited 1 (Python's uncaught exception), not 2."""
+    try:
+        print(line, file=sys.stderr, flush=True)
+    except (OSError, ValueError):  # nothing to say it on
         pass
 
 

@@ -5,7 +5,6 @@ run the SLAM, a small sweep on Dask, draw the figures and write ``report.md`` / 
 from __future__ import annotations
 
 import os
-import shutil
 import time
 import warnings
 from pathlib import Path
@@ -56,14 +55,13 @@ def _run_demo(out: Path, cfg: StudyConfig, sweep_executor: str | None, beat) -> 
     # log; its Fig. 9 / 10 tables; a figures run's figures.yaml): they stayed beside its report as if they were its
     DEMO_OWNER.remove_earlier(out, DEMO_OUTPUTS, keep=("tables/study.yaml",), also=(  # study.yaml: written first, next
         *(f"figures/{name}" for name in FIGURE_PART_FILES), *(f"tables/{name}.parquet" for name in STUDY_TABLE_NAMES),
-        f"figures/sweep_{DEMO_SWEEP['name']}_*", f"sweeps/{DEMO_SWEEP['name']}/cells/*.parquet"))
+        *_sweep_files(out)))
     save_tables(tables, cfg, notes, out / "tables")
     sweep_table = None
     if sweep_executor:
         spec = SweepSpec.from_dict(DEMO_SWEEP)
         log(f"== sweep {spec.name}: {len(spec.cells())} cells on {sweep_executor}")
-        folder = out / "sweeps" / spec.name
-        shutil.rmtree(folder, ignore_errors=True)  # the demo recomputes everything, like the rest of it
+        folder = out / "sweeps" / spec.name  # the earlier demo's sweep removed above: it recomputes everything
         beat.label = f"sweep {spec.name}"
         result = run_sweep(spec, folder, sweep_executor, progress=False)
         sweep_table = result.table
@@ -83,6 +81,28 @@ def _run_demo(out: Path, cfg: StudyConfig, sweep_executor: str | None, beat) -> 
     md, html = write_report(out, "lmsbench demo: fast feature extraction in sensor coordinates", sections)
     log(f"== wrote {md} and {html} ({elapsed:.0f} s)")
     return md
+
+
+def _sweep_files(out: Path) -> list[str]:
+    """The files of the demo's sweep that an earlier demo into ``out`` wrote by names a pattern stands for
+    (``sub/name``), named exactly: its cells, ``cells/KEY.parquet`` for the key of each cell of DEMO_SWEEP
+    (``sweep.cell_key``; the sweep reads no file), and its plots, ``figures/sweep_demo_k_vs_noise_METRIC.*``
+    for the metrics its table holds (``figures.make.sweep_stems``, as the demo drew them from it). The
+    patterns ``figures/sweep_demo_k_vs_noise_*`` and ``cells/*.parquet`` removed a user's files of such
+    names too, and the sweep's folder was removed whole before it ran."""
+    from experiments.figures.make import sweep_stems
+    from experiments.options import FIGURE_ENDS
+    from experiments.sweep import SweepSpec, cell_key
+    from lms200 import LmsbenchError
+
+    spec = SweepSpec.from_dict(DEMO_SWEEP)
+    folder = f"sweeps/{spec.name}"
+    names = [f"{folder}/cells/{cell_key(spec.kind, params)}.parquet" for params in spec.cells()]
+    try:  # a table the demo's sweep wrote: its plots are those of its metrics; none (or damaged): none drawn
+        stems = sweep_stems(out / folder) if (out / folder / "results.parquet").is_file() else []
+    except (LmsbenchError, OSError, ValueError):
+        stems = []
+    return names + [f"figures/{stem}{end}" for stem in stems for end in FIGURE_ENDS]
 
 
 #: The real log of the demo's sim-to-real section (skipped with a note where absent).

@@ -17,9 +17,11 @@ import stat
 import tempfile
 import sys
 import threading
+import warnings
+from contextlib import contextmanager
 from pathlib import Path
 from dataclasses import dataclass, field
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Callable, Iterator, Mapping, Sequence
 
 import yaml
 
@@ -683,6 +685,19 @@ def check_log(path: str | os.PathLike) -> Path:
     return p
 
 
+
+@contextmanager
+def warnings_after_checks() -> Iterator[None]:
+    """Hold the warnings raised in the block, a command's checks of its inputs before any work (a sensor
+    or sweep file read in an old spelling), and say them as it ends; a user error in it is its one line
+    alone, the warnings of the run it refused unsaid: `simulate --sensor OLD.yaml --rate-hz 1e9` said the
+    old spelling's warning, then the rate's error (every user error is one line)."""
+    with warnings.catch_warnings(record=True) as held:
+        yield
+    for w in held:
+        warnings.showwarning(w.message, w.category, w.filename, w.lineno, w.file, w.line)
+
+
 SIMULATE_OUTPUTS = (SIMULATE_LOG, *SIMULATE_OTHER_FILES)
 #: The hidden file ``lmsbench simulate`` writes into its --out folder before any of its outputs and
 #: removes once they are all whole (experiments.simulation.run_simulation): a run stopped or killed
@@ -935,14 +950,15 @@ class Owner:
         tables/trajectory.parquet (which ``figures --tables D/tables`` drew as the new study's Fig. 10),
         and a run stopped while drawing left the earlier run's figures beside its first ones. Call it
         after :func:`check_out` (which refused a file of these names no earlier run wrote). Only the
-        files ``writes`` names exactly go, and those ``also`` names (``sub/name`` or a pattern of
-        them, files the command writes by names a pattern of ``writes`` stands for): a user's file
-        that matches a pattern of an earlier run's folder (``sweep_notes.csv`` beside figures'
-        ``sweep_*``) was removed with them (review of round 10). Returns the names removed
-        (``sub/name`` in sub-folders)."""
-        named = writes.named()
-        earlier = {n for n in (self.earlier(folder, writes) if folder.is_dir() else set())
-                   if n in named or any(fnmatch.fnmatchcase(n, pat) for pat in also)}
+        files ``writes`` names exactly go, and those ``also`` names exactly (``sub/name``: files the
+        command writes by names a pattern of ``writes`` stands for, as the earlier run recorded them,
+        :func:`recorded_names`, or as the command alone names them): a user's file that matches a
+        pattern of an earlier run's folder (``sweep_notes.csv`` beside figures' ``sweep_*``, a
+        ``realdata_notes.csv`` beside compare's ``realdata_*``) was removed with them (review of
+        round 10; ``also`` took patterns until round 11). Returns the names removed (``sub/name`` in
+        sub-folders)."""
+        named = writes.named() | set(also)
+        earlier = {n for n in (self.earlier(folder, writes) if folder.is_dir() else set()) if n in named}
         gone = sorted(n for n in earlier if n not in self.records) + sorted(n for n in earlier if n in self.records)
         gone = [n for n in gone if n not in keep]
         for name in gone:
@@ -955,6 +971,21 @@ class Owner:
                 except OSError:
                     break
         return gone
+
+
+#: The files experiments.style.save_figure writes for a figure of one table: STEM.png, STEM.pdf, STEM.csv.
+FIGURE_ENDS = (".png", ".pdf", ".csv")
+
+
+def recorded_names(record: Path, key: str) -> tuple[str, ...]:
+    """The output files an earlier run listed under ``key`` of its YAML record ``record`` (figures.yaml's
+    ``sweep_plots``, compare's config.yaml ``figures``): what it wrote by names a pattern stands for,
+    listed before it wrote them, so that the next run into the folder removes exactly those
+    (:meth:`Owner.remove_earlier`) and no file of the user's that matches the pattern. () where the
+    record lists none (a folder of a version before these lists: its files of those names stay)."""
+    raw = _yaml_mapping(record) if record.is_file() else None
+    names = raw.get(key) if raw is not None else None
+    return tuple(n for n in names if isinstance(n, str)) if isinstance(names, list) else ()
 
 
 #: What each command's earlier run left that says so (a user's summary.txt or config.yaml in a

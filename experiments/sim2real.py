@@ -705,19 +705,20 @@ def sim2real(log: str | Path, world: str = "mit", seeds: Sequence[int] = DEFAULT
             raise LmsbenchError(f"{log}: {exc}") from None
     if not any(rec.scan.valid.any() for rec in real):
         raise LmsbenchError(f"{log}: nothing to compare: none of the {len(real)} scans used has a valid reading")
-    # too few real scans is known now: said at once, not after minutes of calibration, fits and simulation
-    # (a log of 6 scans warned only at the end, 2.5 min in); the run goes on, as the docs say it reports
+    if sensor is not None:  # else the calibration's pass, over the whole log, says what it skipped
+        report_skipped(reader)
+    if sensor is None:
+        sensor = calibrate_log(log, world=world if world in ("office", "cluttered", "mit") else "office",
+                               stride=max(1, stride // 2), fit_duration=fit_duration or FIT_DURATION_S, **opts).sensor
+    # too few real scans is known now: said before the fits and the simulation, not after minutes of them (a
+    # log of 6 scans warned only at the end, 2.5 min in); the run goes on, as the docs say it reports. After
+    # the calibration (seconds), which refuses too few scans: `--stride 1000` said this warning, then the error
     real_advice = advice
     if advice is None and (span is None or n_read < span):  # the log holds no more: --max-scans gives none
         real_advice = f"{'a lower --stride or ' if stride > 1 else ''}a longer log: it holds {n_read} scans"
     early = small_sample_warnings(len(real), MIN_SCANS, None, real_advice)
     for line in early:
         warnings.warn(line, LmsbenchWarning, stacklevel=2)
-    if sensor is not None:  # else the calibration's pass, over the whole log, says what it skipped
-        report_skipped(reader)
-    if sensor is None:
-        sensor = calibrate_log(log, world=world if world in ("office", "cluttered", "mit") else "office",
-                               stride=max(1, stride // 2), fit_duration=fit_duration or FIT_DURATION_S, **opts).sensor
     limits, limits_source = odometry_limits_and_source(np.frombuffer(odometry, dtype=float).reshape(-1, 4))
     glass = glass_rate(world, no_return_share(real, sensor.max_reading))
     rough, scale, relief = (fit_world(real, sensor, limits, glass, probe_duration, probe_rate_hz, len(probes), fit_rooms,

@@ -93,6 +93,29 @@ def test_a_closed_standard_error_keeps_the_status_and_stdout_clean(tmp_path):
     assert (out.returncode, out.stdout) == (0, f"simulated 7 scans of world office (seed 0, 0.2 s) into {tmp_path / 'sim'}\n")
 
 
+class _FullStream:
+    """A text stream every write of which fails as one to /dev/full does."""
+
+    def write(self, text: str) -> int:
+        raise OSError(28, "No space left on device")
+
+    def flush(self) -> None:
+        pass
+
+
+@pytest.mark.parametrize("args, status, out", [(["info", "{tmp}/none.clf"], 2, ""), (["info", "--bogus"], 2, ""),
+                                               (["--version"], 0, "lmsbench ")])
+def test_a_standard_error_that_cannot_be_written_keeps_the_status(tmp_path, monkeypatch, capsys, args, status, out):
+    """``lmsbench info MISSING 2>/dev/full``: the OSError of the error's own line came out of its handler,
+    and the user error exited 1 (an uncaught exception), not 2; every user error exits 2, said or not."""
+    from experiments.cli import main
+
+    monkeypatch.setattr(sys, "stderr", _FullStream())
+    assert main([a.format(tmp=tmp_path) for a in args]) == status
+    said = capsys.readouterr().out
+    assert said.startswith(out) and (said if out else "") == said
+
+
 def test_a_closed_standard_descriptor_is_not_taken_by_the_next_file_opened(tmp_path):
     """With fd 2 closed, the next file opened took number 2, and whatever wrote to "stderr" (a C
     library, a child process) wrote into it; it is pointed at /dev/null first."""

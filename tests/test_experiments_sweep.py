@@ -837,7 +837,7 @@ def test_a_user_cells_metric_named_as_the_runners_inputs_record_is_refused():
 
 @pytest.mark.parametrize("metrics, said", [
     ({"m": 10**30}, "ValueError: cell kind 'mysw:cell' returned metric 'm' as a whole number of 31 digits, beyond "
-                    "int64's range (+-9.2e18) that a sweep's table holds; return it as a float ("),
+                    "int64's range (+-9.2e18) that a sweep's table holds (a float holds it: 1e+30) ("),
     ({"m": [1, 2]}, "TypeError: cell kind 'mysw:cell' returned metric 'm' as list, not a scalar (a number, text, a bool "
                     "or None): a sweep's table holds one value a cell ("),
     ({"a/b\n": 1.0}, "ValueError: cell kind 'mysw:cell' returned a metric named 'a/b\\n': a metric's name is printable "
@@ -871,7 +871,7 @@ def test_a_cells_metric_its_table_cannot_hold_fails_the_cell(metrics, said):
                                    "error, elapsed_s, cell), which would overwrite its values; name it otherwise"),
     ({"fixed": {"cell": 1}, "grid": {"a": [1, 2]}}, "parameter(s) ['cell'] named as a column the runner writes"),
     ({"grid": {"a": [1, 10**30]}}, "grid.a: a whole number of 31 digits, beyond int64's range (+-9.2e18) that a "
-                                   "sweep's table holds; write it as a float (1e+30)"),
+                                   "sweep's table holds (a float holds it: 1e+30)"),
     ({"grid": {"a,b": [[1, 2**63]]}}, "grid.a,b: a whole number of 19 digits, beyond int64's range"),
 ])
 def test_a_parameter_the_table_cannot_hold_is_refused(raw, said):
@@ -881,6 +881,25 @@ def test_a_parameter_the_table_cannot_hold_is_refused(raw, said):
     with pytest.raises(SweepSpecError, match="^" + re.escape(said)):
         SweepSpec.from_dict({"name": "t", "kind": "mysw:cell", **raw})
     assert SweepSpec.from_dict({"name": "t", "kind": "mysw:cell", "grid": {"a": [-2**63, 2**63 - 1]}}).cells()
+
+
+def test_the_int64_bound_is_one_check_said_in_one_wording():
+    """A grid value, a random int's bound and a cell's metric beyond int64 are refused by one check with one
+    wording (spec.table_int_problem): the spec said "write it as a float", the cells "return it as a float"
+    (without the float), the random draws "[-2**63, 2**63 - 1] (64-bit integers)", each its own bound test."""
+    from experiments.sweep.cells import run_cell
+    from experiments.sweep.spec import table_int_problem
+
+    said = table_int_problem(-(2**63) - 1)
+    assert said == ("a whole number of 19 digits, beyond int64's range (+-9.2e18) that a sweep's table holds (a float "
+                    "holds it: -9.22337e+18)")
+    assert [table_int_problem(v) for v in (2**63 - 1, -(2**63), np.int64(5), True, 1e30)] == [None] * 5
+    with pytest.raises(SweepSpecError, match="^" + re.escape(f"grid.a: {said}") + "$"):
+        SweepSpec.from_dict({"name": "t", "kind": "mysw:cell", "grid": {"a": [-(2**63) - 1]}})
+    with pytest.raises(SweepSpecError, match="^" + re.escape(f"random.a: int's bound is {said}") + "$"):
+        SweepSpec.from_dict({"name": "t", "kind": "mysw:cell", "random": {"a": {"int": [-(2**63) - 1, 0]}}, "samples": 1})
+    row = run_cell("mysw:cell", {"x": 1}, lambda params: {"m": -(2**63) - 1})
+    assert row["error"].startswith(f"ValueError: cell kind 'mysw:cell' returned metric 'm' as {said} ("), row
 
 
 def test_figures_refuse_a_sweep_metric_named_as_no_file_can_be():
@@ -1153,3 +1172,46 @@ def test_a_finished_sweeps_table_is_taken_as_its_sweep_yamls_cells(tmp_path: Pat
         warnings.simplefilter("ignore")  # repeated random draws
         run_sweep(spec, tmp_path / "s", "inprocess", progress=False)
     assert check_sweep_results(tmp_path / "s") == tmp_path / "s"
+
+
+@pytest.mark.parametrize("options", [["--workers", "3", "--inprocess"], ["--scheduler", "bogus:x"]])
+def test_a_bad_option_of_a_sweep_of_an_old_spelling_is_its_error_alone(tmp_path, capsys, options):
+    """``sweep S.yaml --workers 3 --inprocess`` with an old spelling in S.yaml said the spelling's warning
+    (the file is read first), then the option's error: a user error is one line, the error alone."""
+    from experiments.cli import main
+
+    path = tmp_path / "old.yaml"
+    path.write_text("name: old\nkind: extract\nfixed: {method: sensor, world: office, duration: 1.0}\n"
+                    "grid: {sensor.resolution_deg: [0.5, 1.0]}\nseeds: [0]\n")
+    assert main(["sweep", str(path), "--out", str(tmp_path / "o"), *options]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("lmsbench sweep: error: "), err
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_cell_file_whose_parameters_were_edited_is_computed_again(tmp_path):
+    """A resumed sweep took each cell file of a key as that cell finished: a file whose recorded parameters
+    were edited by hand (the key is a hash of the cell's parameters) was read into the table as the cell's
+    row, ``extractor.k=7`` beside metrics computed with 5, "0 computed, 2 already done", without a word.
+    Such a file is computed again now, said in one warning naming it; the other cell is kept."""
+    from experiments.sweep.cells import register_cell
+
+    register_cell("edited_params_test", lambda params: {"y": 10 * params["k"]})
+    spec = SweepSpec.from_dict({"name": "e", "kind": "edited_params_test", "grid": {"k": [3, 5]}})
+    out = tmp_path / "e"
+    first = run_sweep(spec, out, "inprocess", progress=False)
+    cell = first.table.loc[first.table["k"] == 5, "cell"].iloc[0]
+    path = out / "cells" / f"{cell}.parquet"
+    row = pd.read_parquet(path)
+    row["k"] = 7  # edited by hand
+    row.to_parquet(path, index=False)
+    with pytest.warns(LmsbenchWarning, match=re.escape(f"1 cell file records other parameters than the sweep's cell "
+                                                       f"of its name ({cell}.parquet: k=7, not 5: edited by hand); "
+                                                       "computed again")):
+        again = run_sweep(spec, out, "inprocess", progress=False)
+    assert (again.computed, again.skipped) == (1, 1)
+    assert again.table[["k", "y"]].values.tolist() == [[3, 30], [5, 50]]
+    assert pd.read_parquet(path)["k"].tolist() == [5]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a resume of whole, unedited cells says nothing
+        assert run_sweep(spec, out, "inprocess", progress=False).skipped == 2

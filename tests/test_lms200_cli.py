@@ -605,3 +605,51 @@ def test_a_stop_while_the_device_is_opened_ends_the_opening_at_once(tmp_path: Pa
     assert status == 0 and took < 3, (status, took, captured.err)
     assert captured.out.strip() == f"stopped while opening loop://: recorded no scan; {out} not written"
     assert not out.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_emulate_ends_at_once_when_its_log_is_moved_mid_run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                            capsys: pytest.CaptureFixture[str]) -> None:
+    """``emulate --log L`` whose log is moved while it replays: the next pass cannot read it, and the
+    device went silent with the error said only at Ctrl-C. It ends at once now: the log's error, one
+    line, exit 2. In this process (the command in the main thread, a host reading the pty in another);
+    ``--duration 20`` bounds the run should it not end."""
+    import threading
+
+    import lms200.adapters as adapters
+    from experiments.cli import main
+
+    log = tmp_path / "src.clf"
+    write_log(log, [Record(s) for s in source(10)])
+    made: list[adapters.PtyAdapter] = []
+
+    class Recorded(adapters.PtyAdapter):
+        def __init__(self, *args: object, **kwargs: object) -> None:
+            super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+            made.append(self)
+
+    monkeypatch.setattr(adapters, "PtyAdapter", Recorded)
+    moved: list[float] = []
+
+    def host() -> None:
+        deadline = time.monotonic() + 20
+        while not made and time.monotonic() < deadline:
+            time.sleep(0.01)
+        try:
+            with LMS200(made[0].path, baud=38400) as lms:
+                scans = lms.scans()
+                next(scans), next(scans)
+                log.rename(tmp_path / "moved.clf")
+                moved.append(time.monotonic())
+                for _ in range(100):  # the device goes silent as the next pass fails: a link error ends this
+                    next(scans)
+        except Exception:  # noqa: BLE001 - the host's side of the device going away
+            pass
+
+    thread = threading.Thread(target=host, daemon=True)
+    thread.start()
+    status = main(["lms200", "emulate", "--log", str(log), "--time-scale", "0.01", "--duration", "20"])
+    ended = time.monotonic()
+    thread.join(timeout=10)
+    err = capsys.readouterr().err.splitlines()
+    assert moved and ended - moved[0] < 3.0, (moved, ended)
+    assert (status, err[1:]) == (2, [f"lmsbench lms200 emulate: error: no such log: {log}"]), err

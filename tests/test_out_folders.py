@@ -89,11 +89,15 @@ def test_compare_run_again_leaves_none_of_the_earlier_runs_outputs_beside_its_ow
     assert main(["compare", str(tmp_path / "a.clf"), *base]) == 0
     assert {p.name for p in out.iterdir()} >= {"compare.parquet", "realdata_a_clf.png", "realdata_a_clf.csv"}
     capsys.readouterr()
+    (out / "realdata_notes.csv").write_text("mine\n")  # a user's file of a name compare's realdata_* matched: kept
     assert main(["compare", str(tmp_path / "b.clf"), *base, "--format", "csv"]) == 0
+    assert (out / "realdata_notes.csv").read_text() == "mine\n"  # it was removed as the earlier run's (round 11)
+    (out / "realdata_notes.csv").unlink()
     written = sorted(p.name for p in out.iterdir())
     assert written == [
         "compare.csv", "config.yaml", "realdata_b_clf.csv", "realdata_b_clf.pdf", "realdata_b_clf.png",
         "summary.csv", "summary.txt"]
+    assert sorted(yaml.safe_load((out / "config.yaml").read_text())["figures"]) == written[2:5]
     wrote = [line for line in capsys.readouterr().out.splitlines() if line.startswith("wrote ")]
     assert sorted(Path(p).name for p in wrote[0][len("wrote "):].split(", ")) == written  # the .pdf and .csv were left out
 
@@ -399,6 +403,25 @@ def test_a_demo_or_sim2real_stopped_at_its_first_files_is_taken_by_the_next_run(
     assert sorted(p.name for p in s2r.iterdir()) == sorted(SIM2REAL_OUTPUTS)  # the marker and temporary files gone
 
 
+def _finished_sweep(folder: Path, raw: dict) -> list[str]:
+    """A sweep folder as a finished run of ``raw`` leaves it (sweep.yaml, results.parquet of every cell with
+    an f1, the cells' files), without computing a cell; returns its cell files' names (``cells/KEY.parquet``)."""
+    import pandas as pd
+
+    from experiments.sweep import SweepSpec, cell_key
+    from experiments.sweep.runner import spec_record
+
+    spec = SweepSpec.from_dict(raw)
+    rows = [{**params, "f1": 0.5 + 0.01 * i, "status": "ok", "error": "", "elapsed_s": 0.1,
+             "cell": cell_key(spec.kind, params)} for i, params in enumerate(spec.cells())]
+    (folder / "cells").mkdir(parents=True, exist_ok=True)
+    (folder / "sweep.yaml").write_text(spec_record(spec))
+    pd.DataFrame(rows).to_parquet(folder / "results.parquet", index=False)
+    for row in rows:
+        pd.DataFrame([row]).to_parquet(folder / "cells" / f"{row['cell']}.parquet", index=False)
+    return [f"cells/{row['cell']}.parquet" for row in rows]
+
+
 def test_a_demo_run_again_leaves_no_figures_record_beside_its_own_figures(tmp_path, capsys, monkeypatch):
     """`figures --tables DEMO/tables --out DEMO/figures` leaves its figures.yaml there; the next
     demo into DEMO redrew the figures and kept it, a record of a figures run (its tables, its
@@ -416,14 +439,24 @@ def test_a_demo_run_again_leaves_no_figures_record_beside_its_own_figures(tmp_pa
     assert main(argv) == 0, capsys.readouterr().err
     assert main(["figures", "--tables", str(demo / "tables"), "--out", str(demo / "figures")]) == 0
     assert (demo / "figures" / "figures.yaml").is_file()
-    earlier = ["figures/sweep_demo_k_vs_noise_f1.png", "sweeps/demo_k_vs_noise/results.parquet",
-               "sweeps/demo_k_vs_noise/cells/a.parquet", "sim2real/sim2real.csv", "tables/trajectory.parquet"]
+    earlier = ["figures/sweep_demo_k_vs_noise_f1.png", "figures/sweep_demo_k_vs_noise_f1.csv", "sim2real/sim2real.csv",
+               "tables/trajectory.parquet"]
     for name in earlier:  # an earlier demo's (with its sweep, sim2real and SLAM), as its report.md tells them
         (demo / name).parent.mkdir(parents=True, exist_ok=True)
         (demo / name).write_bytes(b"earlier")
+    _finished_sweep(demo / "sweeps" / "demo_k_vs_noise", experiments.demo.DEMO_SWEEP)  # its cells by their keys
+    # a user's files of names the demo's patterns matched (figures/sweep_demo_k_vs_noise_*, cells/*.parquet) stay:
+    # they were removed with the earlier demo's (round 11); the earlier demo's own are named exactly
+    mine = ["figures/sweep_demo_k_vs_noise_notes.csv", "sweeps/demo_k_vs_noise/cells/mine.parquet"]
+    for name in mine:
+        (demo / name).write_bytes(b"mine")
     assert main(argv) == 0, capsys.readouterr().err
-    assert sorted(p.name for p in (demo / "figures").iterdir()) == ["fig7_timing.csv", "fig7_timing.pdf", "fig7_timing.png"]
-    assert sorted(p.name for p in demo.iterdir()) == ["figures", "report.html", "report.md", "tables"]
+    assert all((demo / name).read_bytes() == b"mine" for name in mine)
+    assert sorted(p.name for p in (demo / "figures").iterdir()) == [
+        "fig7_timing.csv", "fig7_timing.pdf", "fig7_timing.png", "sweep_demo_k_vs_noise_notes.csv"]
+    assert sorted(str(p.relative_to(demo / "sweeps")) for p in (demo / "sweeps").rglob("*")) == [
+        "demo_k_vs_noise", "demo_k_vs_noise/cells", "demo_k_vs_noise/cells/mine.parquet"]
+    assert sorted(p.name for p in demo.iterdir()) == ["figures", "report.html", "report.md", "sweeps", "tables"]
     assert sorted(p.name for p in (demo / "tables").iterdir()) == ["notes.txt", "study.yaml", "summary.parquet", "timing.parquet"]
 
 
@@ -461,6 +494,16 @@ def test_figures_run_again_removes_the_earlier_runs_files_it_does_not_write(tabl
         # --tables from elsewhere writes no table: tables/ is left as it was
         left = ["notes.txt", "study.yaml", "timing.parquet"] + (["trajectory.parquet"] if argv is redrawn else [])
         assert sorted(p.name for p in (out / "tables").iterdir()) == left
+    # an earlier --sweep run's plots, which its figures.yaml lists, go when a run without --sweep replaces it (they
+    # stayed: README); a user's sweep_mynotes.csv stays
+    sweep = tmp_path / "sw"
+    _finished_sweep(sweep, {"name": "k", "kind": "extract", "grid": {"extractor.k": [3, 5]}})
+    assert main([*redrawn, "--sweep", str(sweep)]) == 0, capsys.readouterr().err
+    plots = ["sweep_k_f1.csv", "sweep_k_f1.pdf", "sweep_k_f1.png"]
+    assert sorted(yaml.safe_load((out / "figures.yaml").read_text())["sweep_plots"]) == plots
+    (out / "sweep_mynotes.csv").write_bytes(b"mine")
+    assert main(redrawn) == 0, capsys.readouterr().err
+    assert sorted(p.name for p in out.iterdir()) == sorted([*figures, "sweep_mynotes.csv", "figures.yaml", "tables"])
 
 
 @pytest.mark.slow

@@ -252,3 +252,22 @@ def test_a_sweeps_old_sensor_file_is_warned_of_once(tmp_path: Path) -> None:
         f"lmsbench sweep: warning: {old}: beam_width_deg: 0.4 (deg) is the old spelling, read as beam_width: "
         "0.006981317007977318 (rad); write `beam_width: 0.006981317007977318` instead"]
     assert "sf: 1 cells, 1 computed" in run.stdout
+
+
+@pytest.mark.parametrize("argv", [["simulate", "--sensor", "{old}", "--rate-hz", "1e9", "--out", "{out}"],
+                                  ["compare", "office", "--sensor", "{old}", "--rate", "1e9", "--out", "{out}"],
+                                  ["sim2real", "{log}", "--sensor", "{old}", "--rate-hz", "1e9", "--out", "{out}"]])
+def test_an_option_refused_after_an_old_sensor_yaml_is_read_is_its_error_alone(tmp_path: Path, capsys, argv) -> None:
+    """The rate is checked against the sensor file's step, so after the file is read: its old spelling's
+    warning came first, then the rate's error (a user error is one line). The checks' warnings are held
+    (options.warnings_after_checks) and said once they pass; a refused run says its error alone."""
+    from experiments.cli import main
+    from lms200 import Record, Scan, write_log
+
+    old = tmp_path / "old.yaml"
+    old.write_text("resolution_deg: 1.0\nn_beams: 181\n")
+    log = tmp_path / "run.clf"
+    write_log(log, [Record(Scan(np.full(181, 2.0), -np.pi / 2, np.pi / 180, 0.0, 8.183, stamp=float(k))) for k in range(3)])
+    status = main([a.format(old=old, out=tmp_path / "out", log=log) for a in argv])
+    err = capsys.readouterr().err.splitlines()
+    assert (status, len(err)) == (2, 1) and "1e+09 scans/s is more than the sensor gives" in err[0], err

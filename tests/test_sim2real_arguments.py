@@ -51,3 +51,17 @@ def test_a_bad_argument_is_refused_before_any_simulation(tmp_path: Path, monkeyp
     with pytest.raises(LmsbenchError) as info:
         sim2real(log, **{**kwargs, **change})
     assert str(info.value) == message
+
+
+def test_a_stride_past_the_log_is_its_error_alone(tmp_path: Path) -> None:
+    """``sim2real LOG --stride 1000`` on a log of 40 scans said the early warning (only 1 real scans), then
+    the calibration's error: a user error is one line, the error alone. The warning now follows the
+    calibration, which refuses too few scans."""
+    import warnings
+
+    log = tmp_path / "room.clf"
+    write_log(log, [Record(_room(0.2 * k)) for k in range(40)])
+    with warnings.catch_warnings(record=True) as said, pytest.raises(LmsbenchError, match="calibrating needs at least 2"):
+        warnings.simplefilter("always")
+        sim2real(log, world="office", seeds=[1], duration=1.0, stride=1000)
+    assert [str(w.message) for w in said] == []

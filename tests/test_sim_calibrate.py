@@ -448,18 +448,24 @@ def test_sim2real_of_a_simulated_log_agrees_with_itself(tmp_path: Path, capsys: 
 def test_sim2real_warns_of_too_few_real_scans_before_the_work(tmp_path: Path, monkeypatch) -> None:
     """Found by fuzzing (round 9): a log of 6 scans ran sim2real's calibration, fits and simulation,
     about 2.5 minutes, and only then warned "only 2 real scans"; the count is known once the log is
-    read, so it is warned then, naming what gives more (the log ends: --max-scans gives none)."""
+    read, so it is warned then, naming what gives more (the log ends: --max-scans gives none). After
+    the calibration (seconds; stubbed here), which refuses too few scans: said before it, `--stride
+    1000` gave the warning, then the calibration's error; before the fits (the minutes)."""
+    from types import SimpleNamespace
+
     import experiments.calibrate
+    import experiments.sim2real as s2r
     from experiments.sim2real import sim2real
     from lms200.errors import LmsbenchWarning
 
     class Stop(Exception):
         pass
 
-    def calibrate_log(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202 - the work starts here
+    def fits(*args, **kwargs):  # noqa: ANN002, ANN003, ANN202 - the long work starts here
         raise Stop
 
-    monkeypatch.setattr(experiments.calibrate, "calibrate_log", calibrate_log)
+    monkeypatch.setattr(experiments.calibrate, "calibrate_log", lambda *a, **k: SimpleNamespace(sensor=SensorConfig(units="cm")))
+    monkeypatch.setattr(s2r, "odometry_limits_and_source", fits)
     recs = simulate_records("cluttered", seed=7, duration=2.0, sensor=SensorConfig(units="cm"), rate_hz=3.0)
     write_carmen(tmp_path / "log.clf", recs)
     with pytest.warns(LmsbenchWarning) as warned, pytest.raises(Stop):  # old: Stop, no warning

@@ -17,7 +17,7 @@ from lms200.yamlio import dump as dump_yaml
 
 from experiments.overrides import check_set_once, set_option
 from experiments.logargs import add_log_options, given_log_flags, plain_log_options, read_log_options, report_skipped
-from experiments.options import (WORLDS, COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, OutTree, check_sim2real_finished, SIMULATE_OUTPUTS, listed_seed, InputError, check_methods, check_out,
+from experiments.options import (WORLDS, COMPARE_FIGURES, COMPARE_OUTPUTS, COMPARE_OWNER, DURATION, FIGURE_ENDS, OutTree, recorded_names, warnings_after_checks, check_sim2real_finished, SIMULATE_OUTPUTS, listed_seed, InputError, check_methods, check_out,
                                  Underflow, check_out_spares, check_seeds, count, plain_number, path_arg, scan_rate, text)
 
 
@@ -142,24 +142,25 @@ def run(args: argparse.Namespace) -> int:
 
     runs = {m: make_config(m, **params.get(m, {})) for m in methods}  # as compare makes them (checked above)
     check_sources(args.sources, read_log_options(args), args.seeds, runs)
-    sensor = None
-    if args.sensor is not None:
-        import sim
+    with warnings_after_checks():  # a refused run is its error alone, without a warning of what it read
+        sensor = None
+        if args.sensor is not None:
+            import sim
 
-        check_sim2real_finished(args.sensor, "--sensor")
-        try:
-            sensor = sim.SensorConfig.from_yaml(args.sensor)
-        except LmsbenchError:
-            raise
-        except (yaml.YAMLError, TypeError, ValueError, KeyError) as exc:
-            raise LmsbenchError(f"{args.sensor}: not a sensor model ({' '.join(str(exc).split())})") from None
-    if world_words(args.sources):  # simulated here, at --rate
-        import sim
+            check_sim2real_finished(args.sensor, "--sensor")
+            try:
+                sensor = sim.SensorConfig.from_yaml(args.sensor)
+            except LmsbenchError:
+                raise
+            except (yaml.YAMLError, TypeError, ValueError, KeyError) as exc:
+                raise LmsbenchError(f"{args.sensor}: not a sensor model ({' '.join(str(exc).split())})") from None
+        if world_words(args.sources):  # simulated here, at --rate
+            import sim
 
-        step = (sensor or sim.SensorConfig()).angle_increment
-        check_scan_rate(args.rate, step, "--rate")
-        for m, cfg in runs.items():  # the simulated scans' step, before any is simulated
-            check_step(cfg, step, m, f"the simulated scans ({args.sensor or 'the default sensor'})")
+            step = (sensor or sim.SensorConfig()).angle_increment
+            check_scan_rate(args.rate, step, "--rate")
+            for m, cfg in runs.items():  # the simulated scans' step, before any is simulated
+                check_step(cfg, step, m, f"the simulated scans ({args.sensor or 'the default sensor'})")
     warm_up_kernels()
     sources = parse_sources(args.sources, args.seeds, args.duration, args.rate, args.stride, args.max_scans,
                             read_options=read_log_options(args), poses=args.poses, sensor=sensor)
@@ -191,13 +192,19 @@ def run(args: argparse.Namespace) -> int:
     # what produced each source's scans: the sensor that was simulated (interlaced or not), the log read
     resolved["scans_from"] = [dict(name=src.name, kind=src.kind, **src.settings) for src in sources]
     resolved["versions"] = versions()
+    from experiments.figures.realdata import figure_stem
+
+    drawn = [src for src in sources if src.kind == "log" and src.name in set(summary["source"])]  # a figure each
+    # the files of the logs' figures, named by the log (realdata_*), listed before they are written: the next run
+    # into the folder removes exactly these (options.recorded_names), not a user's realdata_notes.csv beside them
+    resolved["figures"] = [figure_stem(Path(), src.name).name + end for src in drawn for end in FIGURE_ENDS]
     run_folder = args.out is None  # results/compare/DATE_TIME, linked as latest once its files are written
     args.out = args.out or new_run_folder("results/compare", now=started)  # named by the run's start, as the demo's
     # the earlier run's outputs first (options.Owner.remove_earlier): those it may not write again stayed beside
     # this run's as if they were its own (`compare a.clf` then `compare b.clf` into D left a.clf's realdata_*
     # figure beside a summary of b.clf alone; a --format csv run the parquet table of the run before)
     COMPARE_OWNER.remove_earlier(args.out, OutTree(COMPARE_OUTPUTS + COMPARE_FIGURES), keep=("config.yaml",),
-                                 also=COMPARE_FIGURES)  # a log's figure and rows: named by the log, every realdata_*
+                                 also=recorded_names(args.out / "config.yaml", "figures"))  # a log's figure, as listed
     # config.yaml first, whole: it tells the folder as compare's (options.COMPARE_OWNER); a run stopped
     # after compare.parquet left a folder the next run into it refused
     write_record(args.out / "config.yaml", dump_yaml(resolved, sort_keys=False))
@@ -210,11 +217,10 @@ def run(args: argparse.Namespace) -> int:
     text = format_summary(summary) + "\n" + format_ran_with(resolved["ran_with"])  # the noise, as read: config.yaml
     write_record(args.out / "summary.txt", text + "\n")
     figures = []
-    for src in sources:
-        if src.kind == "log" and src.name in set(summary["source"]):
-            from experiments.figures.realdata import fig_explained_vs_lines, figure_stem
+    for src in drawn:
+        from experiments.figures.realdata import fig_explained_vs_lines
 
-            figures += [str(p) for p in fig_explained_vs_lines(summary, src.name, figure_stem(args.out, src.name))]
+        figures += [str(p) for p in fig_explained_vs_lines(summary, src.name, figure_stem(args.out, src.name))]
     args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     if run_folder:
         link_latest(args.out)

@@ -10,9 +10,9 @@ from typing import Any
 from lms200.yamlio import dump as dump_yaml
 
 from experiments.logargs import add_log_options, given_log_flags, plain_log_options, read_log_options
-from experiments.options import (WORLDS, DEMO_OWNER, DURATION, FIGURE_PART_FILES, FIGURES_OUTPUTS, FIGURES_OWNER, SEED, STUDY_TABLES, InputError, OutTree, check_log, real_path,
+from experiments.options import (WORLDS, DEMO_OWNER, DURATION, FIGURE_ENDS, FIGURE_PART_FILES, FIGURES_OUTPUTS, FIGURES_OWNER, SEED, STUDY_TABLES, InputError, OutTree, check_log, real_path,
                                  check_methods, check_out, check_study_tables, check_sweep_results, path_arg, scan_rate, world_name,
-                                 text, check_link)
+                                 text, check_link, recorded_names)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -92,7 +92,9 @@ def run(args: argparse.Namespace) -> int:
     args.out = args.out or new_run_folder("results/figures", now=started)  # named by the run's start
     if not run_folder and not _demos_figures(args.out):  # the earlier run's files this run may not write again (a
         FIGURES_OWNER.remove_earlier(args.out, replaces, keep=("figures.yaml",), also=(  # demo's: its sweep plots, kept)
-            *FIGURE_PART_FILES, *(f"tables/{name}.parquet" for name in STUDY_TABLE_NAMES)))
+            *FIGURE_PART_FILES, *(f"tables/{name}.parquet" for name in STUDY_TABLE_NAMES),
+            # the sweep plots its figures.yaml lists (a --sweep run's stayed beside a run without --sweep)
+            *recorded_names(args.out / "figures.yaml", "sweep_plots")))
     write_record(args.out / "figures.yaml", _record(args))  # first, whole: a run stopped after it is told as ours
     if not args.tables:
         save_tables(tables, cfg, notes, args.out / "tables")
@@ -222,9 +224,13 @@ def _record(args: argparse.Namespace) -> str:
     """figures.yaml: what drew the figures of its folder (options.FIGURES_OWNER tells the folder by
     it): a figure and its CSV say nothing of lmsbench, and ``--tables T --out DIR`` writes no table."""
 
+    from experiments.figures.make import sweep_stems
     from experiments.provenance import versions
 
+    # sweep_plots: the files of the --sweep plots, named by a pattern (sweep_*), listed before they are drawn: the
+    # next figures run into the folder removes exactly these (options.recorded_names), not a user's sweep_notes.csv
+    plots = [f"{stem}{end}" for folder in args.sweep for stem in sweep_stems(folder) for end in FIGURE_ENDS]
     record = {"command": "lmsbench figures", "tables": str(args.tables) if args.tables else "tables (computed by this run)",
-              "sweeps": [str(folder) for folder in args.sweep], "versions": versions()}
+              "sweeps": [str(folder) for folder in args.sweep], "sweep_plots": plots, "versions": versions()}
     return ("# what drew the figures in this folder; lmsbench figures --out replaces its files only beside this record\n"
             + dump_yaml(record, sort_keys=False))

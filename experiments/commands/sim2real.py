@@ -17,6 +17,7 @@ from experiments.options import (
     SIM2REAL_OWNER,
     WORLDS,
     InputError,
+    warnings_after_checks,
     check_log,
     check_out,
     check_out_spares,
@@ -96,26 +97,27 @@ def run(args: argparse.Namespace) -> int:
     if args.world == "mit":  # before any work: given or default, the probe worlds are not the report's
         resolve_probe_seeds(args.seeds, args.probe_seeds, ("--seeds", "--probe-seeds"))
     args.probe_duration = PROBE_DURATION_S if args.probe_duration is None else args.probe_duration
-    sensor = None
-    if args.sensor is not None:
-        check_yaml(args.sensor, "a sensor YAML")
-        check_sim2real_finished(args.sensor, "--sensor")
-        sensor = SensorConfig.from_yaml(args.sensor)
-    first = next(iter(read_log(args.log, **read_options)), None)  # the log's geometry, before any work
-    if first is not None:
-        from features.registry import check_beams
+    with warnings_after_checks():  # a refused run is its error alone, without a warning of what it read
+        sensor = None
+        if args.sensor is not None:
+            check_yaml(args.sensor, "a sensor YAML")
+            check_sim2real_finished(args.sensor, "--sensor")
+            sensor = SensorConfig.from_yaml(args.sensor)
+        first = next(iter(read_log(args.log, **read_options)), None)  # the log's geometry, before any work
+        if first is not None:
+            from features.registry import check_beams
 
-        check_beams(first.scan, f"{args.log}: scan 0")  # the extractors' limit, as extract's
-    if sensor is not None:
-        check_scan_rate(args.rate_hz, sensor.angle_increment, "--rate-hz")
-        if first is not None and (len(first.scan) != sensor.n_beams
-                                  or not math.isclose(first.scan.angle_increment, sensor.angle_increment, rel_tol=1e-6)):
-            # it ran: 181-beam worlds against 361-beam real scans, lines per scan compared across resolutions
-            raise InputError(f"--sensor {args.sensor}: {sensor.n_beams} beams at {sensor.resolution_deg:g} deg, but "
-                             f"{args.log} has {len(first.scan)} at {math.degrees(first.scan.angle_increment):g} deg; "
-                             "sim2real compares like with like (calibrate the log, or give a sensor of its geometry)")
-    elif first is not None:  # the sensor is calibrated to the log: its resolution
-        check_scan_rate(args.rate_hz, first.scan.angle_increment, "--rate-hz")
+            check_beams(first.scan, f"{args.log}: scan 0")  # the extractors' limit, as extract's
+        if sensor is not None:
+            check_scan_rate(args.rate_hz, sensor.angle_increment, "--rate-hz")
+            if first is not None and (len(first.scan) != sensor.n_beams
+                                      or not math.isclose(first.scan.angle_increment, sensor.angle_increment, rel_tol=1e-6)):
+                # it ran: 181-beam worlds against 361-beam real scans, lines per scan compared across resolutions
+                raise InputError(f"--sensor {args.sensor}: {sensor.n_beams} beams at {sensor.resolution_deg:g} deg, but "
+                                 f"{args.log} has {len(first.scan)} at {math.degrees(first.scan.angle_increment):g} deg; "
+                                 "sim2real compares like with like (calibrate the log, or give a sensor of its geometry)")
+        elif first is not None:  # the sensor is calibrated to the log: its resolution
+            check_scan_rate(args.rate_hz, first.scan.angle_increment, "--rate-hz")
     first = (f"sim2real: calibrating, fitting the world to the log and simulating {len(args.seeds)} world(s) "
              "(minutes at the defaults; Ctrl-C stops) ...")
     with heartbeat_on_terminal("sim2real", first):

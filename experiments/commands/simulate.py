@@ -8,7 +8,7 @@ from lms200.yamlio import load as load_yaml
 import argparse
 import math
 
-from experiments.options import (WORLDS, DURATION, MAX_DURATION_S, MIN_DURATION_S, SEED, SIMULATE_OUTPUTS, SIMULATE_OWNER, InputError, check_file, check_sim2real_finished,
+from experiments.options import (WORLDS, DURATION, MAX_DURATION_S, MIN_DURATION_S, SEED, SIMULATE_OUTPUTS, SIMULATE_OWNER, InputError, check_file, warnings_after_checks, check_sim2real_finished,
                                  check_world_file,
                                  check_out, check_out_spares, check_yaml, known_worlds, number, path_arg, scan_rate, world_hint)
 
@@ -134,14 +134,15 @@ def _config(args: argparse.Namespace):
 def run(args: argparse.Namespace) -> int:
     from experiments.simulation import run_simulation
 
-    cfg = _config(args)  # reads and checks the inputs (the config, the sensor YAML), writes nothing
-    # every input against --out at once, the config's world.json too (it was a second check after the
-    # config was read): a world.json read is an input too, `simulate --world DIR/world.json --out DIR`
-    # wrote world.json over it
-    world = cfg.world if cfg.world.endswith(".json") else None
-    check_out_spares(args.out, SIMULATE_OUTPUTS, [f for f in (args.config, args.sensor, world) if f is not None])
-    check_out(args.out, writes=SIMULATE_OUTPUTS, owner=SIMULATE_OWNER)  # after: an input in --out is the sharper message
-    check_world_file(cfg.world)
+    with warnings_after_checks():  # a refused run is its error alone, without a warning of what it read
+        cfg = _config(args)  # reads and checks the inputs (the config, the sensor YAML), writes nothing
+        # every input against --out at once, the config's world.json too (it was a second check after the
+        # config was read): a world.json read is an input too, `simulate --world DIR/world.json --out DIR`
+        # wrote world.json over it
+        world = cfg.world if cfg.world.endswith(".json") else None
+        check_out_spares(args.out, SIMULATE_OUTPUTS, [f for f in (args.config, args.sensor, world) if f is not None])
+        check_out(args.out, writes=SIMULATE_OUTPUTS, owner=SIMULATE_OWNER)  # after: an input in --out is the sharper message
+        check_world_file(cfg.world)
     records = run_simulation(cfg, args.out, progress=not args.quiet)
     args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     print(f"simulated {len(records)} scans of world {cfg.world} (seed {cfg.seed}, {cfg.duration:g} s) into {args.out}")

@@ -151,7 +151,7 @@ def _check_metrics(kind: str, metrics: dict[Any, Any]) -> None:
     beyond int64."""
     import numpy as np
 
-    from .spec import MAX_TABLE_INT, metric_name_problem
+    from .spec import metric_name_problem, table_int_problem
 
     for name, value in metrics.items():
         if name == INPUTS_KEY:  # a built-in cell's record of its files (checked above for other kinds)
@@ -169,10 +169,8 @@ def _check_metrics(kind: str, metrics: dict[Any, Any]) -> None:
         if isinstance(value, str) and not _utf8(value):
             raise ValueError(f"cell kind {kind!r} returned metric {name!r} as text that is no UTF-8 (a lone surrogate, as "
                              "os.fsdecode gives for undecodable bytes): a sweep's table cannot hold it")
-        if isinstance(value, (int, np.integer)) and not isinstance(value, (bool, np.bool_)) \
-                and not -MAX_TABLE_INT - 1 <= int(value) <= MAX_TABLE_INT:
-            raise ValueError(f"cell kind {kind!r} returned metric {name!r} as a whole number of {len(str(abs(int(value))))} "
-                             "digits, beyond int64's range (+-9.2e18) that a sweep's table holds; return it as a float")
+        if (beyond := table_int_problem(value)) is not None:
+            raise ValueError(f"cell kind {kind!r} returned metric {name!r} as {beyond}")
 
 
 def _run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None) -> dict[str, Any]:

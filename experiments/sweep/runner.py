@@ -155,7 +155,7 @@ def _run_into(spec: SweepSpec, store: CellStore, fn: Any, cells: list[dict[str, 
     inputs = [digests(params, seen) if digests else None for params in cells]
     keys = [cell_key(spec.kind, params, given) for params, given in zip(cells, inputs)]
     inputs_of = dict(zip(keys, inputs))
-    done = store.done()
+    done = store.done(dict(zip(keys, cells)))  # a cell file whose parameters were edited is computed again
     if retry_failed:
         done = {k for k in done if store.status(k) == "ok"}
     todo = [(key, params) for key, params in zip(keys, cells) if key not in done]

@@ -384,8 +384,9 @@ def _check(spec: SweepSpec) -> None:
             raise SweepSpecError(f"random.{name}: {law} needs [low, high], finite numbers with low <= high, got {shown(args, 80)}")
         if law == "int" and not all(isinstance(a, int) for a in args):
             raise SweepSpecError(f"random.{name}: int needs whole-number bounds [low, high], got {shown(args, 80)}")
-        if law == "int" and not all(-(2**63) <= a < 2**63 for a in args):  # 10**24: numpy's "high is out of bounds"
-            raise SweepSpecError(f"random.{name}: int needs bounds in [-2**63, 2**63 - 1] (64-bit integers), got {shown(args, 80)}")
+        beyond = next((problem for a in args if (problem := table_int_problem(a))), None) if law == "int" else None
+        if beyond:  # 10**24: numpy's "high is out of bounds"; a draw is a cell's value, as a grid's
+            raise SweepSpecError(f"random.{name}: int's bound is {beyond}")
         if law == "uniform" and not math.isfinite(args[1] - args[0]):  # [-1e308, 1e308]: numpy's OverflowError
             raise SweepSpecError(f"random.{name}: uniform needs high - low finite, got {shown(args, 80)}")
         if law == "loguniform" and args[0] <= 0:
@@ -480,9 +481,22 @@ def _check_scalar(where: str, value: Any) -> None:
     if isinstance(value, (int, float)) and not _finite(value):
         text = repr(value) if isinstance(value, float) else f"a whole number of {_digits(value)} digits"
         raise SweepSpecError(f"{where} must be finite (within float64's range, +-1.8e308), got {text}")
-    if type(value) is int and not -MAX_TABLE_INT - 1 <= value <= MAX_TABLE_INT:
-        raise SweepSpecError(f"{where}: a whole number of {_digits(value)} digits, beyond int64's range (+-9.2e18) "
-                             f"that a sweep's table holds; write it as a float ({float(value):g})")
+    if (problem := table_int_problem(value)) is not None:
+        raise SweepSpecError(f"{where}: {problem}")
+
+
+def table_int_problem(value: Any) -> str | None:  # noqa: ANN401 - any value a sweep's table may be given
+    """Why the whole number ``value`` (a parameter's, a random ``int:`` bound or a cell's metric; Python's
+    or numpy's) cannot be a value of a sweep's table, or None (no whole number, or one within int64,
+    ``MAX_TABLE_INT``): the one check and wording of that bound (the spec and the cells had one each)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)):
+        return None
+    n = int(value)
+    if -MAX_TABLE_INT - 1 <= n <= MAX_TABLE_INT:
+        return None
+    as_float = f": {float(n):g}" if _finite(n) else ""
+    return (f"a whole number of {_digits(n)} digits, beyond int64's range (+-9.2e18) that a sweep's table holds "
+            f"(a float holds it{as_float})")
 
 
 def _draw(space: dict[str, dict[str, list[Any]]], samples: int, seed: int) -> list[dict[str, Scalar]]:

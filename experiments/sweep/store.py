@@ -20,11 +20,12 @@ import os
 import tempfile
 import warnings
 from pathlib import Path
-from typing import Any
+from typing import Any, Mapping
 
 import pandas as pd
 
 from lms200.errors import LmsbenchError, LmsbenchWarning
+from lms200.finite import shown
 
 from experiments.provenance import read_parquet, write_parquet
 
@@ -54,11 +55,16 @@ class CellStore:
     def path(self, key: str) -> Path:
         return self.cells / f"{key}.parquet"
 
-    def done(self) -> set[str]:
+    def done(self, params_of: Mapping[str, Mapping[str, Any]] | None = None) -> set[str]:
         """Keys of every cell with a finished file (a Parquet file of one cell's row, by its footer:
         a damaged one is computed again, said in one warning). The footer alone: reading every
-        cell's row here cost a resumed sweep 1.6 ms a cell (3.2 s for 2,000) before any work."""
+        cell's row here cost a resumed sweep 1.6 ms a cell (3.2 s for 2,000) before any work.
+        ``params_of`` (key -> the parameters of the sweep's cell of that key): a file of one of these
+        keys whose row records other parameters (edited by hand: the key is a hash of them) is no
+        finished cell either, computed again with one warning naming it; its row was taken into the
+        table as the cell's, the parameters it records beside metrics computed with others."""
         keys, damaged, foreign = set(), [], []  # foreign: a whole file of another cell's row (its `cell` not its name)
+        edited: list[str] = []
         if not os.access(self.cells, os.R_OK | os.X_OK):  # "sw/cells: permission denied" named no reason
             raise LmsbenchError(f"{self.cells}: the sweep's folder of finished cells cannot be read (permission "
                                 "denied); make it readable (chmod u+rx) to resume the sweep")
@@ -73,6 +79,9 @@ class CellStore:
                 damaged.append(p.name)
             elif (held := _cell_of(p, meta)) != p.stem:
                 foreign.append(f"{p.name} holds {held}")
+            elif params_of is not None and p.stem in params_of and (
+                    differ := _params_differ(p, meta, params_of[p.stem])) is not None:
+                edited.append(f"{p.name}: {differ}")
             else:
                 keys.add(p.stem)
         if damaged:
@@ -84,6 +93,11 @@ class CellStore:
                           f"the row of another cell than {'their' if len(foreign) > 1 else 'its'} name "
                           f"({'; '.join(foreign[:3])}{', ...' if len(foreign) > 3 else ''}: copied or renamed by hand); "
                           "computed again", LmsbenchWarning, stacklevel=2)
+        if edited:
+            warnings.warn(f"{self.cells}: {len(edited)} cell file{'s' if len(edited) > 1 else ''} record{'s' if len(edited) == 1 else ''} "
+                          f"other parameters than the sweep's cell of {'their' if len(edited) > 1 else 'its'} name "
+                          f"({'; '.join(edited[:3])}{', ...' if len(edited) > 3 else ''}: edited by hand); computed again",
+                          LmsbenchWarning, stacklevel=2)
         return keys
 
     def check_writable(self) -> None:
@@ -156,6 +170,49 @@ def _cell_of(path: Path, meta: Any) -> str | None:
     except Exception:  # noqa: BLE001 - pyarrow's ArrowInvalid, OSError: damaged since the footer was read
         return None
     return None if row is None else str(row["cell"].iloc[0])
+
+
+def _params_differ(path: Path, meta: Any, params: Mapping[str, Any]) -> str | None:
+    """The first of ``params`` that the one-row cell file ``path`` (its footer ``meta``) records
+    otherwise, as ``NAME=RECORDED, not GIVEN`` (or ``NAME missing``), else None. From the footer's
+    statistics, as :func:`_cell_of` reads the key (a value of one row is its column's min and max), and
+    from the row where a column has none; a bool is not the number 1, numbers compare by value."""
+    names = meta.schema.names
+    recorded: dict[str, Any] = {}
+    unread = []
+    for name in params:
+        if name not in names:
+            return f"{name} missing"
+        try:
+            column = meta.row_group(0).column(names.index(name))
+            stats = column.statistics if meta.num_row_groups == 1 else None
+        except Exception:  # noqa: BLE001 - no statistics: read below
+            stats = None
+        if stats is not None and stats.has_min_max and stats.min == stats.max:
+            recorded[name] = stats.min
+        elif stats is not None and stats.null_count == 1:
+            recorded[name] = None
+        else:
+            unread.append(name)
+    if unread:
+        row = _cell_row(path, [*unread, "status"] if "status" not in unread else unread)
+        if row is None:
+            return "unreadable"
+        recorded.update({name: _plain(row[name].iloc[0]) for name in unread})
+    for name, given in params.items():
+        held = recorded[name]
+        if isinstance(held, bytes):
+            held = held.decode("utf-8", "replace")
+        if isinstance(held, bool) != isinstance(given, bool) or held != given:
+            return f"{name}={shown(held, 40)}, not {shown(given, 40)}"
+    return None
+
+
+def _plain(value: Any) -> Any:
+    """A table's value as Python's (numpy's scalars as their values, a missing value as None)."""
+    if value is None or (isinstance(value, float) and value != value):
+        return None
+    return value.item() if hasattr(value, "item") else value
 
 
 def _cell_row(path: Path, columns: list[str] | None = None) -> pd.DataFrame | None:
