@@ -15,7 +15,7 @@ import pandas as pd
 from experiments.figures.make import article, draw_figures, draw_sweep
 from experiments.figures.study import STUDY_TABLE_NAMES, StudyConfig, run_study, save_tables
 from experiments.figures.tables import panels_log_name
-from experiments.options import DEMO_OUTPUTS, DEMO_OWNER, FIGURE_PART_FILES
+from experiments.options import DEMO_OUTPUTS, DEMO_OWNER, FIGURE_PART_FILES, recorded_names
 from experiments.report import Section, figure, markdown_table, write_report
 from lms200.errors import LmsbenchWarning
 from lms200.finite import printable
@@ -55,7 +55,9 @@ def _run_demo(out: Path, cfg: StudyConfig, sweep_executor: str | None, beat) -> 
     # log; its Fig. 9 / 10 tables; a figures run's figures.yaml): they stayed beside its report as if they were its
     DEMO_OWNER.remove_earlier(out, DEMO_OUTPUTS, keep=("tables/study.yaml",), also=(  # study.yaml: written first, next
         *(f"figures/{name}" for name in FIGURE_PART_FILES), *(f"tables/{name}.parquet" for name in STUDY_TABLE_NAMES),
-        *_sweep_files(out)))
+        *_sweep_files(out),
+        # a `figures --sweep S --out DEMO/figures` run's plots, as its figures.yaml (removed here) lists them
+        *(f"figures/{name}" for name in recorded_names(out / "figures" / "figures.yaml", "sweep_plots"))))
     save_tables(tables, cfg, notes, out / "tables")
     sweep_table = None
     if sweep_executor:

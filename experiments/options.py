@@ -691,11 +691,22 @@ def warnings_after_checks() -> Iterator[None]:
     """Hold the warnings raised in the block, a command's checks of its inputs before any work (a sensor
     or sweep file read in an old spelling), and say them as it ends; a user error in it is its one line
     alone, the warnings of the run it refused unsaid: `simulate --sensor OLD.yaml --rate-hz 1e9` said the
-    old spelling's warning, then the rate's error (every user error is one line)."""
-    with warnings.catch_warnings(record=True) as held:
+    old spelling's warning, then the rate's error (every user error is one line). Only the showing is
+    held: the filters are left as they are (a user's cell module that silences its own warnings when a
+    check imports it keeps them silenced; ``catch_warnings`` put the filters back as they were)."""
+    held: list[tuple[Any, ...]] = []
+    say = warnings.showwarning
+
+    def hold(*args: Any) -> None:  # noqa: ANN401 - showwarning's arguments, as the warnings module passes them
+        held.append(args)
+
+    warnings.showwarning = hold
+    try:
         yield
-    for w in held:
-        warnings.showwarning(w.message, w.category, w.filename, w.lineno, w.file, w.line)
+    finally:
+        warnings.showwarning = say
+    for args in held:
+        say(*args)
 
 
 SIMULATE_OUTPUTS = (SIMULATE_LOG, *SIMULATE_OTHER_FILES)

@@ -424,7 +424,7 @@ CASES = [
     (["sweep", "{sweep_text_bounds.yaml}", "--out", O], "uniform needs [low, high]"),
     (["sweep", "{sweep_int_bounds.yaml}", "--out", O], "int needs whole-number bounds"),
     # bounds numpy cannot draw from: "internal error: ValueError: high is out of bounds for int64" / OverflowError
-    (["sweep", "{sweep_int_huge.yaml}", "--out", O], "random.extractor.min_points: int's bound is a whole number of 25 digits, beyond int64's range"),
+    (["sweep", "{sweep_int_huge.yaml}", "--out", O], "random.extractor.min_points: int's bounds must be within int64's range, [-2**63, 2**63 - 1], that a sweep's table holds, got a whole number of 25 digits"),
     (["sweep", "{sweep_uniform_wide.yaml}", "--out", O], "random.extractor.ad_tau: uniform needs high - low finite"),
     (["sweep", "{sweep_big_seed.yaml}", "--out", O], "`seeds:` must be distinct integers in [0, 4294967295]"),
     (["sweep", "{sweep_name_number.yaml}", "--out", O], "name: must be a string"),

@@ -705,3 +705,30 @@ def test_a_read_only_file_the_run_may_write_under_a_pattern_is_refused(tmp_path,
     options._check_replaceable(out, tree, removed=("realdata_*.png",))  # removed by the run: allowed
     with pytest.raises(options.InputError, match=r"realdata_a_clf\.png cannot be written"):
         options._check_replaceable(out, tree)
+
+
+def test_a_figures_runs_sweep_plots_in_a_demos_figures_folder_go_with_the_next_run(tmp_path, capsys, monkeypatch):
+    """`figures --sweep S --out DEMO/figures`, then a figures run there without --sweep: the plots of S
+    stayed (in a demo's folder figures removed nothing), and its figures.yaml, their one list, was written
+    over, so the next demo left them beside its report too (review of round 11). A figures run there
+    removes the plots its earlier figures.yaml lists, but the demo's own; so does the demo."""
+    import pandas as pd
+
+    import experiments.demo
+
+    timing = pd.DataFrame({"method": ["sensor"], "scan": [0], "time_ms": [0.05]})
+    monkeypatch.setattr(experiments.demo, "run_study", lambda cfg, log=print: ({"timing": timing, "summary": timing}, []))
+    monkeypatch.setattr(experiments.demo, "_sim2real_section", lambda cfg, out, log: None)
+    demo, sw = tmp_path / "demo", tmp_path / "sw"
+    argv = ["demo", "--no-sweep", "--duration", "1", "--out", str(demo)]
+    assert main(argv) == 0, capsys.readouterr().err
+    _finished_sweep(sw, {"name": "k", "kind": "extract", "grid": {"extractor.k": [3, 5]}})
+    plots = {"sweep_k_f1.png", "sweep_k_f1.pdf", "sweep_k_f1.csv"}
+    drawn = ["figures", "--tables", str(demo / "tables"), "--sweep", str(sw), "--out", str(demo / "figures")]
+    for then in (["figures", "--tables", str(demo / "tables"), "--out", str(demo / "figures")], argv):
+        assert main(drawn) == 0, capsys.readouterr().err
+        assert plots <= {p.name for p in (demo / "figures").iterdir()}
+        (demo / "figures" / "sweep_mine.csv").write_text("a user's\n")
+        assert main(then) == 0, capsys.readouterr().err
+        left = {p.name for p in (demo / "figures").iterdir()}
+        assert not plots & left and "sweep_mine.csv" in left, (then[0], left)

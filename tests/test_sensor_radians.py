@@ -271,3 +271,30 @@ def test_an_option_refused_after_an_old_sensor_yaml_is_read_is_its_error_alone(t
     status = main([a.format(old=old, out=tmp_path / "out", log=log) for a in argv])
     err = capsys.readouterr().err.splitlines()
     assert (status, len(err)) == (2, 1) and "1e+09 scans/s is more than the sensor gives" in err[0], err
+
+
+def test_the_checks_hold_the_showing_of_warnings_not_the_filters() -> None:
+    """A user's cell module that silences its own warnings when a check imports it kept them silenced
+    before options.warnings_after_checks; the first version (catch_warnings) put the filters back."""
+    import warnings
+
+    from experiments.options import warnings_after_checks
+
+    with warnings.catch_warnings():  # this test's own: the filters and showwarning put back after it
+        warnings.simplefilter("always")
+        shown: list[str] = []
+        warnings.showwarning = lambda message, *_: shown.append(str(message))
+        with warnings_after_checks():
+            warnings.warn("held until the checks pass")
+            warnings.filterwarnings("ignore", message="noisy")  # as a cell module's import does
+            assert shown == []
+        assert shown == ["held until the checks pass"]
+        warnings.warn("noisy thing")
+        assert shown == ["held until the checks pass"]
+        try:
+            with warnings_after_checks():
+                warnings.warn("the run it refused")
+                raise ValueError("a check failed")
+        except ValueError:
+            pass
+        assert shown == ["held until the checks pass"]  # a refused run says its error alone

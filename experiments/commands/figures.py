@@ -95,6 +95,8 @@ def run(args: argparse.Namespace) -> int:
             *FIGURE_PART_FILES, *(f"tables/{name}.parquet" for name in STUDY_TABLE_NAMES),
             # the sweep plots its figures.yaml lists (a --sweep run's stayed beside a run without --sweep)
             *recorded_names(args.out / "figures.yaml", "sweep_plots")))
+    elif not run_folder:  # a demo's figures/: the demo's own files stay, an earlier figures run's sweep plots go (they
+        _remove_earlier_sweep_plots(args.out)  # stayed, and its figures.yaml, the one list of them, was written over)
     write_record(args.out / "figures.yaml", _record(args))  # first, whole: a run stopped after it is told as ours
     if not args.tables:
         save_tables(tables, cfg, notes, args.out / "tables")
@@ -171,6 +173,18 @@ def _check_not_a_demos_figures(out: Path, tables: Path | None) -> None:
         raise InputError(f"--out {out}: the figures of the lmsbench demo in {demo}, drawn from its tables/ and shown in its "
                          f"report.md; figures drawn from --tables {tables}, not the demo's tables, would not match them: "
                          f"give a new folder as --out, or --tables {demo / 'tables'} to redraw the demo's figures")
+
+
+def _remove_earlier_sweep_plots(out: Path) -> None:
+    """In a demo's figures/ folder ``out``, remove the sweep plots an earlier figures run there lists in its
+    figures.yaml, but the demo's own (of its sweep, by name): each a plain file name, no pattern."""
+    from experiments.demo import _sweep_files
+
+    own = {name.removeprefix("figures/") for name in _sweep_files(real_path(out).parent)}
+    plots = tuple(n for n in recorded_names(out / "figures.yaml", "sweep_plots")
+                  if n not in own and "/" not in n and not any(c in n for c in "*?["))
+    if plots:
+        FIGURES_OWNER.remove_earlier(out, OutTree(plots), keep=("figures.yaml",))
 
 
 def _demos_figures(out: Path) -> bool:

