@@ -54,10 +54,12 @@ def test_a_damaged_line_after_a_millimetre_logs_first_scans_is_its_error_alone(l
 @pytest.mark.parametrize("command, says", [
     (["slam"], f"none of its {N_SCANS} scans has a valid beam, nothing to localise against: all "),
     (["calibrate"], f"too few straight runs of beams at 1-4 m in {N_SCANS} scan(s) to estimate the range noise "
-                    f"(0 beam triples): none of the first 50 scans has a valid beam: all ")])
+                    f"(0 beam triples): none of the first 50 scans has a valid beam: all "),
+    (["demo", "--no-sweep", "--log"], f"none of its {N_SCANS} scans has a valid beam, no scan to draw for Fig. 9: all "),
+    (["figures", "--log"], f"none of its {N_SCANS} scans has a valid beam, no scan to draw for Fig. 9: all ")])
 def test_a_millimetre_log_refused_says_its_units_in_the_error(logs, tmp_path, capsys, command, says) -> None:
     """The units warning was the error's reason, said on a line of its own before it: now the error says it."""
-    line = _refused([*command, str(logs["mm"]), "--out", str(tmp_path / ("out" if command == ["slam"] else "s.yaml"))],
+    line = _refused([*command, str(logs["mm"]), "--out", str(tmp_path / ("s.yaml" if command == ["calibrate"] else "out"))],
                     capsys)
     assert line.startswith(f"lmsbench {command[0]}: error: {logs['mm']}: {says}"), line
     assert "ranges in millimetres (or another unit) given as metres?" in line, line
