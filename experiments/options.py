@@ -694,8 +694,17 @@ def warnings_after_checks() -> Iterator[None]:
     old spelling's warning, then the rate's error (every user error is one line)."""
     with warnings.catch_warnings(record=True) as held:
         yield
+    # said through the filters again, in the registry of the module that warned: leaving the block resets every
+    # registry (warnings' filters version), so a file the work reads again (emulate --log replays the log it
+    # checked) said its warning a second time
+    modules = {getattr(m, "__file__", None): m for m in list(sys.modules.values())}
     for w in held:
-        warnings.showwarning(w.message, w.category, w.filename, w.lineno, w.file, w.line)
+        module = modules.get(w.filename)
+        if module is None:
+            warnings.showwarning(w.message, w.category, w.filename, w.lineno, w.file, w.line)
+            continue
+        registry = module.__dict__.setdefault("__warningregistry__", {})
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, module=module.__name__, registry=registry)
 
 
 

@@ -42,13 +42,31 @@ def _refused(argv: list[str], capsys: pytest.CaptureFixture[str]) -> str:
     return err[0]
 
 
-@pytest.mark.parametrize("command", [["slam"], ["info"], ["calibrate"]])
-def test_a_damaged_line_after_a_millimetre_logs_first_scans_is_its_error_alone(logs, tmp_path, capsys, command) -> None:
+@pytest.mark.parametrize("argv", [["slam", "{log}", "--out", "{tmp}/out"], ["info", "{log}"],
+                                  ["calibrate", "{log}", "--out", "{tmp}/s.yaml"], ["lms200", "emulate", "--log", "{log}"]])
+def test_a_damaged_line_after_a_millimetre_logs_first_scans_is_its_error_alone(logs, tmp_path, capsys, argv) -> None:
     """The reader warns of the units after 50 scans, then meets the damaged line: that warning, then the
     error (two lines for a user error)."""
-    out = ["--out", str(tmp_path / ("out" if command == ["slam"] else "s.yaml"))] if command != ["info"] else []
-    line = _refused([*command, str(logs["mmbad"]), *out], capsys)
-    assert line.startswith(f"lmsbench {command[0]}: error: {logs['mmbad']}:") and "malformed ROBOTLASER1 line" in line, line
+    line = _refused([a.format(log=logs["mmbad"], tmp=tmp_path) for a in argv], capsys)
+    assert line.startswith(f"lmsbench {' '.join(argv[:2 if argv[0] == 'lms200' else 1])}: error: {logs['mmbad']}:"), line
+    assert "malformed ROBOTLASER1 line" in line, line
+
+
+def test_a_held_warning_is_said_once_where_the_work_reads_the_file_again(logs) -> None:
+    """Leaving the held block resets warnings' registries: a log checked, then read again by the work
+    (emulate --log replays it), said its units warning twice. Said again through the filters, it is once."""
+    import warnings
+
+    from experiments.options import warnings_after_checks
+    from lms200 import read_log
+    from lms200.units import RangeUnitsWarning
+
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("default")
+        with warnings_after_checks():
+            sum(1 for _ in read_log(logs["mm"]))
+        sum(1 for _ in read_log(logs["mm"]))
+    assert [w.category for w in said] == [RangeUnitsWarning], said
 
 
 @pytest.mark.parametrize("command, says", [
