@@ -51,8 +51,10 @@ from lms200.finite import fixed
 from lms200.calibration import LogCalibration, calibrate_scans
 from lms200.laser_geometry import MIN_RANGE_MAX_M
 from lms200.timing import LMS200_MAX_FOV_DEG
+from lms200.units import UNITS_SCANS, UnitsTally
 
 from experiments.logargs import report_skipped
+from experiments.options import warnings_after_checks
 
 WIDTH_GRID_STEPS = (0.0, 0.1, 0.25, 0.5, 0.75, 1.0, 1.5, 2.0)  # spot widths tried, in beam steps
 TAIL_GRID = (0.0, 0.1, 0.3)  # noise_tail_prob values tried
@@ -254,6 +256,8 @@ def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_
                 raise
             yield rec
 
+    units = UnitsTally()  # ranges in millimetres: what the reader warns of, told by the error it leads to
+
     def scans():
         first = None
         for k, rec in enumerate(records()):
@@ -262,21 +266,31 @@ def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_
             if k % stride == 0:
                 first = first or (k, rec.scan)
                 same_geometry(rec.scan, first[1], f"scan {k}", f"scan {first[0]}")
+                if units.scans < UNITS_SCANS:
+                    units.add(rec.scan)
                 yield rec.scan
 
-    try:  # the log's errors (reading it, measuring it) name it; the fit's own errors are not the log's
-        cal = calibrate_scans(scans())
-        if report_skips:
-            report_skipped(reader)
-        base_sensor(cal)  # what the log gives directly: a log too poor for a sensor model is the log's error
-    except LmsbenchError as exc:
-        # told by where it came from, not by the path's text within the message: a mixed-geometry log
-        # named `deg` ("... 1 deg ...") went unnamed
-        if any(exc is e for e in named):
-            raise
-        raise _naming(exc, path) from None
-    except ValueError as exc:
-        raise InputError(f"{path}: {exc}") from None
+    # the reader's warnings (ranges in millimetres, a damaged line skipped) are said once the log is measured:
+    # a log refused here (a malformed line after scan 50, too few straight runs) is its error alone (it said the
+    # units warning, then the error: two lines for a user error)
+    with warnings_after_checks():
+        try:  # the log's errors (reading it, measuring it) name it; the fit's own errors are not the log's
+            cal = calibrate_scans(scans())
+            if report_skips:
+                report_skipped(reader)
+            problem = units.problem()
+            if problem is not None and not np.isfinite(cal.noise.sigma_m):  # the units are why (base_sensor's error)
+                raise LmsbenchError(f"too few straight runs of beams at 1-4 m in {cal.n_scans} scan(s) to estimate the "
+                                    f"range noise ({cal.noise.n_used} beam triples): {problem}")
+            base_sensor(cal)  # what the log gives directly: a log too poor for a sensor model is the log's error
+        except LmsbenchError as exc:
+            # told by where it came from, not by the path's text within the message: a mixed-geometry log
+            # named `deg` ("... 1 deg ...") went unnamed
+            if any(exc is e for e in named):
+                raise
+            raise _naming(exc, path) from None
+        except ValueError as exc:
+            raise InputError(f"{path}: {exc}") from None
     return fit_sensor(cal, world, fit_duration)
 
 

@@ -709,6 +709,18 @@ def warnings_after_checks() -> Iterator[None]:
         say(*args)
 
 
+@contextmanager
+def said_after_checks() -> Iterator[list[str]]:
+    """:func:`warnings_after_checks`, and the lines a command's checks print on stderr (its notes and
+    own warnings, appended to the list it yields) said after them once they pass: `slam LOG --odometry`
+    on a log whose steps take no time said that warning, then the error that the log has no odometry."""
+    lines: list[str] = []
+    with warnings_after_checks():
+        yield lines
+    for line in lines:
+        print(line, file=sys.stderr)
+
+
 SIMULATE_OUTPUTS = (SIMULATE_LOG, *SIMULATE_OTHER_FILES)
 #: The hidden file ``lmsbench simulate`` writes into its --out folder before any of its outputs and
 #: removes once they are all whole (experiments.simulation.run_simulation): a run stopped or killed

@@ -282,6 +282,14 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     if len(records) == 1:  # it ran and reported a healthy run of no step (matched fraction 1 of 0 steps)
         raise LmsbenchError(f"{log}: holds one scan (stamp {fixed(first_stamp)} s); SLAM needs two or more")
     if not any(r.scan.valid.any() for r in records):
+        from lms200.units import units_evidence
+
+        # ranges in millimetres: the error says so (the reader's units warning is held by the command's checks:
+        # it said that warning, then this error, two lines for a user error)
+        mm = units_evidence(r.scan for r in records)
+        if mm is not None:
+            raise LmsbenchError(f"{log}: none of its {len(records)} scans has a valid beam, nothing to localise "
+                                f"against: {mm}")
         raise LmsbenchError(f"{log}: none of its {len(records)} scans has a valid beam (every reading +inf, -inf, nan, 0 "
                             "or outside the scan's range limits): "
                             "nothing to localise against")

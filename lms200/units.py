@@ -73,12 +73,17 @@ class _Tally:
             self.values.update(np.unique(r)[:MIN_DISTINCT].tolist())
 
     def problem(self) -> str | None:
+        evidence = self.evidence()
+        return None if evidence is None else f"none of the first {self.scans} scans has a valid beam: {evidence}"
+
+    def evidence(self) -> str | None:
+        """Why the scans added look like millimetres, after "none has a valid beam" (or None)."""
         if self.valid or self.within or self.readings < MIN_READINGS or len(self.values) < MIN_DISTINCT:
             return None
         share = self.in_range / self.readings
         if share < IN_RANGE_SHARE:
             return None
-        return (f"none of the first {self.scans} scans has a valid beam: all {self.readings:,} finite readings lie "
+        return (f"all {self.readings:,} finite readings lie "
                 f"beyond range_max ({self.range_max:g} m), from {self.least:.6g} to {self.most:.6g}, and "
                 f"{100 * share:.0f} % of them would be in range divided by 1000: ranges in millimetres (or another unit) "
                 "given as metres? A Scan's ranges are metres (a reading beyond range_max is no return, REP-117)")
@@ -98,6 +103,21 @@ def units_problem(scans: Iterable[Scan]) -> str | None:
     for scan in scans:
         tally.add(scan)
     return tally.problem()
+
+
+#: :func:`units_problem` added up by the caller, scan by scan (``add``, then ``problem``): a pass over a
+#: source that holds no scan (``experiments.calibrate``'s measurement) tells its units at its end
+UnitsTally = _Tally
+
+
+def units_evidence(scans: Iterable[Scan]) -> str | None:
+    """:func:`units_problem` without its opening (none of the first N scans has a valid beam), for an
+    error that says that itself: ``slam MM_LOG`` said the units warning, then its own 'none of its N
+    scans has a valid beam' (two lines for a user error); it says the units in its one line."""
+    tally = _Tally()
+    for scan in scans:
+        tally.add(scan)
+    return tally.evidence()
 
 
 def warn_units(scans: Iterable[Scan], where: str) -> None:

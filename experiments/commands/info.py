@@ -12,7 +12,7 @@ from lms200.finite import fixed
 
 from experiments.logargs import LOG_HELP, add_log_options, read_log_options, report_skipped
 from experiments.loginfo import summarise
-from experiments.options import check_log
+from experiments.options import check_log, warnings_after_checks
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -24,17 +24,20 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    args.log = check_log(args.log)  # a simulate folder: its scans.clf
-    reader = read_log(args.log, **read_log_options(args))
-    summary = summarise(reader)
-    stats = reader.stats
-    if summary.scans == 0:
-        if stats.stopped:  # damage before the first scan (read under --skip-bad-lines)
-            raise LogFormatError(args.log, None, no_scan_read(stats.stopped))
-        met = getattr(stats, "messages", {})
-        seen = f" (other lines: {sum(met.values())})" if met else ""
-        raise LogFormatError(args.log, None, "no laser messages found: not a CARMEN log (FLASER/RLASER/ROBOTLASER/RAWLASER "
-                                          f"lines) nor a bag with LaserScan messages{seen}")
+    # the reader's warnings are said once the log is read whole: a log refused (a malformed line after scan 50 of
+    # a log in millimetres) is its error alone (it said the units warning, then the error)
+    with warnings_after_checks():
+        args.log = check_log(args.log)  # a simulate folder: its scans.clf
+        reader = read_log(args.log, **read_log_options(args))
+        summary = summarise(reader)
+        stats = reader.stats
+        if summary.scans == 0:
+            if stats.stopped:  # damage before the first scan (read under --skip-bad-lines)
+                raise LogFormatError(args.log, None, no_scan_read(stats.stopped))
+            met = getattr(stats, "messages", {})
+            seen = f" (other lines: {sum(met.values())})" if met else ""
+            raise LogFormatError(args.log, None, "no laser messages found: not a CARMEN log (FLASER/RLASER/ROBOTLASER/RAWLASER "
+                                              f"lines) nor a bag with LaserScan messages{seen}")
     others = stats.other_lasers() if hasattr(stats, "other_lasers") else {}
     mount = getattr(stats, "mount", None)  # a CARMEN laser off the robot's centre: its poses are the laser's
     changes = getattr(stats, "mount_changes", 0)  # a mounting PARAM line after laser lines: frames differ

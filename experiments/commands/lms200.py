@@ -21,7 +21,7 @@ from lms200.virtual import MAX_TIME_SCALE, MIN_TIME_SCALE
 from experiments.lms200_sources import log_scans, simulator_scans
 from experiments.logargs import add_log_options, given_log_flags, read_log_options
 from experiments.options import (WORLDS, PORT, SEED, InputError, check_link, check_log, check_out_file, count, mid_sentence, number,
-                                 path_arg, text, world_name)
+                                 path_arg, text, warnings_after_checks, world_name)
 
 
 #: emulate / record --duration: at least lms200.timing.MIN_DURATION_S (1e-300 stopped at once: "0 scans sent" /
@@ -92,29 +92,32 @@ def run_emulate(args: argparse.Namespace) -> int:
                          "without --log the device serves simulated scans (give --log LOG, or leave them out)")
     args.world, args.seed = args.world or "office", 0 if args.seed is None else args.seed
     args.host = args.host or "127.0.0.1"
-    if args.log:
-        args.log = check_log(args.log)  # a simulate folder: its scans.clf
-        scans = log_scans(args.log, read_options=read_log_options(args))
-        what = f"scans of {args.log} in a loop"
-    else:
-        scans = simulator_scans(args.world, args.seed)
-        what = f"simulated scans of world {args.world} (seed {args.seed}) along its route graph"
-    device = VirtualLMS200(scans, time_scale=args.time_scale, units=args.units)
-    try:
-        adapter = TcpServer(device, args.host, args.tcp, rfc2217=args.rfc2217) if args.tcp is not None else PtyAdapter(device)
-    except OSError as exc:  # said "[Errno 98] Address already in use (while attempting to bind on address (...))"
-        if args.tcp is None:
-            raise
-        import errno
-        import socket
+    # the log's warnings (ranges in millimetres) are said once it is read whole and the port is open: a refused
+    # run (a malformed line after scan 50, --tcp PORT in use) is its error alone (it said the warning, then the error)
+    with warnings_after_checks():
+        if args.log:
+            args.log = check_log(args.log)  # a simulate folder: its scans.clf
+            scans = log_scans(args.log, read_options=read_log_options(args))
+            what = f"scans of {args.log} in a loop"
+        else:
+            scans = simulator_scans(args.world, args.seed)
+            what = f"simulated scans of world {args.world} (seed {args.seed}) along its route graph"
+        device = VirtualLMS200(scans, time_scale=args.time_scale, units=args.units)
+        try:
+            adapter = TcpServer(device, args.host, args.tcp, rfc2217=args.rfc2217) if args.tcp is not None else PtyAdapter(device)
+        except OSError as exc:  # said "[Errno 98] Address already in use (while attempting to bind on address (...))"
+            if args.tcp is None:
+                raise
+            import errno
+            import socket
 
-        why = str(exc.strerror or exc).split(" (while attempting", 1)[0]
-        if isinstance(exc, socket.gaierror) or (exc.errno or 0) < 0 or exc.errno == errno.EADDRNOTAVAIL:  # < 0: getaddrinfo
-            raise InputError(f"--host {args.host}: cannot listen there ({why}); give an address of this machine "
-                             "(127.0.0.1, or 0.0.0.0 for all of them)") from None
-        bare = args.host.strip("[]")
-        raise InputError(f"--tcp {args.tcp}: cannot listen on {f'[{bare}]' if ':' in bare else bare}:{args.tcp} ({why}); "
-                         "give a free port (--tcp 0 picks one)") from None
+            why = str(exc.strerror or exc).split(" (while attempting", 1)[0]
+            if isinstance(exc, socket.gaierror) or (exc.errno or 0) < 0 or exc.errno == errno.EADDRNOTAVAIL:  # < 0: getaddrinfo
+                raise InputError(f"--host {args.host}: cannot listen there ({why}); give an address of this machine "
+                                 "(127.0.0.1, or 0.0.0.0 for all of them)") from None
+            bare = args.host.strip("[]")
+            raise InputError(f"--tcp {args.tcp}: cannot listen on {f'[{bare}]' if ':' in bare else bare}:{args.tcp} ({why}); "
+                             "give a free port (--tcp 0 picks one)") from None
     where = adapter.url if args.tcp is not None else adapter.path
     print(where, flush=True)
     print(f"virtual LMS200 at {where}: {what}, 9600 baud at power-on, "

@@ -20,7 +20,7 @@ if TYPE_CHECKING:
 
 from experiments.logargs import add_log_options, read_log_options
 from experiments.overrides import check_set_once, extractor_overrides, set_option
-from experiments.options import (SLAM_OUTPUTS, SLAM_OWNER, SLAM_RECORD_KEYS, InputError, check_file, check_log, check_methods, check_out, check_out_spares, check_simulate_finished, check_yaml,
+from experiments.options import (said_after_checks, SLAM_OUTPUTS, SLAM_OWNER, SLAM_RECORD_KEYS, InputError, check_file, check_log, check_methods, check_out, check_out_spares, check_simulate_finished, check_yaml,
                                  count, missing_message, path_arg, positive, text)
 
 
@@ -267,7 +267,7 @@ def _refuse_unread_sections(cfg: "SlamConfig", sections: tuple[str, ...], where:
         raise InputError(f"{where}: {shown} set{'s' if len(changed) == 1 else ''} {what}")
 
 
-def _warn_unread(config: "SlamConfig", records: list, where: Any) -> None:
+def _warn_unread(config: "SlamConfig", records: list, where: Any, said: list[str]) -> None:
     """A warning line per extractor field of the run (``extractor_params``: --config, --set) that no
     scan reads: ``sigma_r: 0.02`` (configs/slam-mit-csail.yaml) ran bit for bit as the defaults on
     the cm-mode MIT CSAIL log, whose scans read sigma_r_cm, and nothing said so."""
@@ -278,7 +278,7 @@ def _warn_unread(config: "SlamConfig", records: list, where: Any) -> None:
     configs = {config.extractor: make_config(config.extractor, **config.extractor_params)}
     for line in unread_fields({config.extractor: config.extractor_params}, configs,
                               sorted({float(r.scan.range_max) for r in records}), f"the scans of {Path(str(where)).name}"):
-        print(f"lmsbench slam: warning: {line}", file=sys.stderr)
+        said.append(f"lmsbench slam: warning: {line}")
 
 
 def in_time_order(stamps: list[float]) -> list[int]:
@@ -332,80 +332,83 @@ def run(args: argparse.Namespace) -> int:
     from experiments.slamrun import EVERY_AND_RATE
 
     started = time.perf_counter()  # the whole command's wall clock, which the summary says beside the run's own
-    if args.every != 1 and args.rate_hz is not None:  # before any work, as load_input refuses them too
-        raise LmsbenchError(EVERY_AND_RATE.format(every=args.every, rate_hz=args.rate_hz))
-    _check_input(Path(args.input))
-    if args.relations is not None:
-        check_file(args.relations, "a relations file")
-    # `slam RUN --config DIR/config.yaml --out DIR` wrote the resolved settings over the given file
-    # (a simulate folder as --out holds its scans.clf, which check_out refuses by name)
-    check_out_spares(args.out, SLAM_OUTPUTS, [f for f in (args.input, args.config, args.relations) if f is not None])
-    # by name alone a folder of the user's metrics.json and slam.png passed, and the run deleted them
-    check_out(args.out, writes=SLAM_OUTPUTS, owner=SLAM_OWNER)  # after: an input in --out is the sharper message
-    config = _config(args)
-    interlaced = simulated_interlaced(args.input)  # before the read: a config.yaml whose interlaced is no bool is refused
-    data = load_input(args.input, args.relations, args.every, args.max_scans, args.rate_hz,
-                      read_options=read_log_options(args), config=config)
-    for note in data.notes:
-        print(note, file=sys.stderr)
-    _warn_unread(config, data.records, data.sources.get("scans", args.input))
-    stamps = [r.scan.stamp for r in data.records]
-    back = next((k for k in range(1, len(stamps)) if stamps[k] < stamps[k - 1]), None)
-    if back is not None:
-        where = data.sources.get("scans", args.input)
-        if not args.skip_bad_lines:
-            raise InputError(f"{where}: time goes backwards at scan {data.number(back)} (stamp {fixed(stamps[back])} s "
-                             f"after {fixed(stamps[back - 1])} s); SLAM needs scans in time order (--skip-bad-lines "
-                             "skips the fewest scans that leave the rest in order)")
-        keep = in_time_order(stamps)
-        kept = set(keep)
-        for k in (k for k in range(len(stamps)) if k not in kept):
-            print(f"{where}: skipped scan {data.number(k)} (stamp {fixed(stamps[k])} s): out of time order", file=sys.stderr)
-        data.records = [data.records[k] for k in keep]
-        data.numbers = [data.number(k) for k in keep]
-        if data.truth is not None and np.array_equal(data.truth[:, 0], stamps):  # a pose per scan (TRUEPOS)
-            data.truth = data.truth[keep]
-        if len(data.records) < 2:  # it ran on the one scan left (load_input refuses a one-scan input)
-            raise InputError(f"{where}: {len(data.records)} of its {len(stamps)} scans are in time order; SLAM "
-                             "needs two or more")
-    from slam.run import in_scale
+    # the checks' notes and warnings are said once they pass: a refused run is its error alone (`slam LOG
+    # --odometry` on a log whose steps take no time said that warning, then the odometry's error)
+    with said_after_checks() as said:
+        if args.every != 1 and args.rate_hz is not None:  # before any work, as load_input refuses them too
+            raise LmsbenchError(EVERY_AND_RATE.format(every=args.every, rate_hz=args.rate_hz))
+        _check_input(Path(args.input))
+        if args.relations is not None:
+            check_file(args.relations, "a relations file")
+        # `slam RUN --config DIR/config.yaml --out DIR` wrote the resolved settings over the given file
+        # (a simulate folder as --out holds its scans.clf, which check_out refuses by name)
+        check_out_spares(args.out, SLAM_OUTPUTS, [f for f in (args.input, args.config, args.relations) if f is not None])
+        # by name alone a folder of the user's metrics.json and slam.png passed, and the run deleted them
+        check_out(args.out, writes=SLAM_OUTPUTS, owner=SLAM_OWNER)  # after: an input in --out is the sharper message
+        config = _config(args)
+        interlaced = simulated_interlaced(args.input)  # before the read: a config.yaml whose interlaced is no bool is refused
+        data = load_input(args.input, args.relations, args.every, args.max_scans, args.rate_hz,
+                          read_options=read_log_options(args), config=config)
+        for note in data.notes:
+            said.append(note)
+        _warn_unread(config, data.records, data.sources.get("scans", args.input), said)
+        stamps = [r.scan.stamp for r in data.records]
+        back = next((k for k in range(1, len(stamps)) if stamps[k] < stamps[k - 1]), None)
+        if back is not None:
+            where = data.sources.get("scans", args.input)
+            if not args.skip_bad_lines:
+                raise InputError(f"{where}: time goes backwards at scan {data.number(back)} (stamp {fixed(stamps[back])} s "
+                                 f"after {fixed(stamps[back - 1])} s); SLAM needs scans in time order (--skip-bad-lines "
+                                 "skips the fewest scans that leave the rest in order)")
+            keep = in_time_order(stamps)
+            kept = set(keep)
+            for k in (k for k in range(len(stamps)) if k not in kept):
+                said.append(f"{where}: skipped scan {data.number(k)} (stamp {fixed(stamps[k])} s): out of time order")
+            data.records = [data.records[k] for k in keep]
+            data.numbers = [data.number(k) for k in keep]
+            if data.truth is not None and np.array_equal(data.truth[:, 0], stamps):  # a pose per scan (TRUEPOS)
+                data.truth = data.truth[keep]
+            if len(data.records) < 2:  # it ran on the one scan left (load_input refuses a one-scan input)
+                raise InputError(f"{where}: {len(data.records)} of its {len(stamps)} scans are in time order; SLAM "
+                                 "needs two or more")
+        from slam.run import in_scale
 
-    # before any output (run_slam checks the same as it goes: a stamp 1e200 s after the one before or an
-    # odometry of 1e300 m was an internal error after the run started)
-    for _ in in_scale(data.records, f"{data.sources.get('scans', args.input)}: scan {{k}}", data.numbers):
-        pass
-    stamps = [r.scan.stamp for r in data.records]
-    still = [k for k in range(1, len(stamps)) if stamps[k] == stamps[k - 1]]
-    if still:  # each such step predicts no motion and searches no turn: kept (a coarse clock still works), said
-        over = ("the motion model predicts no motion and the search no turn over them" if not config.motion.use_odometry
-                else "where the odometry gives no step for them, the motion model predicts no motion and the search no "
-                     "turn over them")
-        print(f"lmsbench slam: warning: {data.sources.get('scans', args.input)}: {len(still)} of {len(stamps) - 1} "
-              f"steps take no time (scan {data.number(still[0])} has the stamp of the scan kept before it, scan "
-              f"{data.number(still[0] - 1)}'s {fixed(stamps[still[0]])} s): "
-              f"{over}", file=sys.stderr)
-    gaps = [k for k in range(1, len(stamps)) if stamps[k] - stamps[k - 1] > config.motion.max_gap]
-    if gaps:  # the constant-velocity model knows nothing of such a gap: the motion restarts (slam.config.MotionConfig)
-        longest = max(gaps, key=lambda k: stamps[k] - stamps[k - 1])
-        over = "" if not config.motion.use_odometry else " where the odometry gives no step"
-        print(f"lmsbench slam: warning: {data.sources.get('scans', args.input)}: {len(gaps)} of {len(stamps) - 1} "
-              f"steps are longer than motion.max_gap, {config.motion.max_gap:g} s (scan {data.number(longest)} is stamped "
-              f"{stamps[longest] - stamps[longest - 1]:.6g} s after scan {data.number(longest - 1)}, the one kept before "
-              f"it): the motion restarts{over} from the "
-              "last pose with zero velocity after each", file=sys.stderr)
-    if config.motion.use_odometry and data.odometry is None:
-        asked = "--odometry" if args.odometry else f"motion.use_odometry (in {args.config})"
-        missing = sum(r.odom is None for r in data.records)
-        has = "this input has none" if missing == len(data.records) else f"{missing} of the {len(data.records)} scans have none"
-        raise LmsbenchError(f"{args.input}: {asked} needs odometry on every scan, and {has}")
-    if args.no_odometry_baseline and data.odometry is None:  # it set nothing: the baseline runs only with odometry
-        raise InputError(f"--no-odometry-baseline: {args.input} {_odometry_lack(data)}, so there is no odometry "
-                         "baseline to leave out (it runs only on an input with odometry on every scan)")
-    if config.preset == "default" and args.no_paper_baseline and data.odometry is None:
-        # the paper preset's filter runs in no baseline: not the paper one (left out), nor the odometry one (no
-        # odometry on this input); the option check could not know the input (review of round 7)
-        _refuse_paper_settings(args, config, f"the default pipeline, with --no-paper-baseline, on {args.input}, which "
-                                             f"{_odometry_lack(data)} for an odometry baseline")
+        # before any output (run_slam checks the same as it goes: a stamp 1e200 s after the one before or an
+        # odometry of 1e300 m was an internal error after the run started)
+        for _ in in_scale(data.records, f"{data.sources.get('scans', args.input)}: scan {{k}}", data.numbers):
+            pass
+        stamps = [r.scan.stamp for r in data.records]
+        still = [k for k in range(1, len(stamps)) if stamps[k] == stamps[k - 1]]
+        if still:  # each such step predicts no motion and searches no turn: kept (a coarse clock still works), said
+            over = ("the motion model predicts no motion and the search no turn over them" if not config.motion.use_odometry
+                    else "where the odometry gives no step for them, the motion model predicts no motion and the search no "
+                         "turn over them")
+            said.append(f"lmsbench slam: warning: {data.sources.get('scans', args.input)}: {len(still)} of {len(stamps) - 1} "
+                  f"steps take no time (scan {data.number(still[0])} has the stamp of the scan kept before it, scan "
+                  f"{data.number(still[0] - 1)}'s {fixed(stamps[still[0]])} s): "
+                  f"{over}")
+        gaps = [k for k in range(1, len(stamps)) if stamps[k] - stamps[k - 1] > config.motion.max_gap]
+        if gaps:  # the constant-velocity model knows nothing of such a gap: the motion restarts (slam.config.MotionConfig)
+            longest = max(gaps, key=lambda k: stamps[k] - stamps[k - 1])
+            over = "" if not config.motion.use_odometry else " where the odometry gives no step"
+            said.append(f"lmsbench slam: warning: {data.sources.get('scans', args.input)}: {len(gaps)} of {len(stamps) - 1} "
+                  f"steps are longer than motion.max_gap, {config.motion.max_gap:g} s (scan {data.number(longest)} is stamped "
+                  f"{stamps[longest] - stamps[longest - 1]:.6g} s after scan {data.number(longest - 1)}, the one kept before "
+                  f"it): the motion restarts{over} from the "
+                  "last pose with zero velocity after each")
+        if config.motion.use_odometry and data.odometry is None:
+            asked = "--odometry" if args.odometry else f"motion.use_odometry (in {args.config})"
+            missing = sum(r.odom is None for r in data.records)
+            has = "this input has none" if missing == len(data.records) else f"{missing} of the {len(data.records)} scans have none"
+            raise LmsbenchError(f"{args.input}: {asked} needs odometry on every scan, and {has}")
+        if args.no_odometry_baseline and data.odometry is None:  # it set nothing: the baseline runs only with odometry
+            raise InputError(f"--no-odometry-baseline: {args.input} {_odometry_lack(data)}, so there is no odometry "
+                             "baseline to leave out (it runs only on an input with odometry on every scan)")
+        if config.preset == "default" and args.no_paper_baseline and data.odometry is None:
+            # the paper preset's filter runs in no baseline: not the paper one (left out), nor the odometry one (no
+            # odometry on this input); the option check could not know the input (review of round 7)
+            _refuse_paper_settings(args, config, f"the default pipeline, with --no-paper-baseline, on {args.input}, which "
+                                                 f"{_odometry_lack(data)} for an odometry baseline")
     if interlaced is False and config.preset == "default" and config.alignment.deskew:
         config = deskew_for_sensor(config, interlaced=False)
         print(f"{args.input}: simulated with interlaced=False (every beam from one pose): alignment.deskew off",

@@ -252,8 +252,14 @@ def check_panel_log(cfg: StudyConfig) -> None:
     +inf / nan readings still left the run folder (or ``--out``) behind, empty (the wrong-input hunt).
     Its first scan's beam step is one the panels' method segments (``features.registry.check_step``,
     compare's message): ``figures --methods split_merge --log`` a 12-deg log drew Fig. 9's real-log
-    panels with no line, exit 0."""
+    panels with no line, exit 0. The read's warnings are the study's to say, as it reads the log again: a
+    log refused here is its error alone (a log in millimetres said the units warning, then this error; the
+    error says the units)."""
+    import warnings
+
     from lms200 import LmsbenchError, read_log
+    from lms200.errors import LmsbenchWarning
+    from lms200.units import UnitsTally
 
     from features.registry import check_step, make_config
 
@@ -265,20 +271,27 @@ def check_panel_log(cfg: StudyConfig) -> None:
     records = iter(read_log(path, **log_options_from_plain(cfg.log_options)))
     method = panel_method_of(cfg)
     n = 0
+    units = UnitsTally()
     try:
-        for record in records:  # the first scan of a log has a valid beam but for a damaged one: no second pass
-            if n == 0:
-                check_step(make_config(method, **(cfg.intel_sensor_params if method == "sensor" else {})),
-                           record.scan.angle_increment, method, f"{path}: scan 0")
-            n += 1
-            if record.scan.valid.any():
-                return
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", LmsbenchWarning)
+            for record in records:  # the first scan of a log has a valid beam but for a damaged one: no second pass
+                if n == 0:
+                    check_step(make_config(method, **(cfg.intel_sensor_params if method == "sensor" else {})),
+                               record.scan.angle_increment, method, f"{path}: scan 0")
+                n += 1
+                if record.scan.valid.any():
+                    return
+                units.add(record.scan)  # every scan read, none held
     finally:
         close = getattr(records, "close", None)  # a generator's: its file is closed now, not when collected
         if close is not None:
             close()
     if n == 0:
         raise LmsbenchError(f"{path}: no laser scans found")
+    mm = units.evidence()  # the reader's units warning, ignored above: the error says it
+    if mm is not None:
+        raise LmsbenchError(f"{path}: none of its {n} scans has a valid beam, no scan to draw for Fig. 9: {mm}")
     raise LmsbenchError(f"{path}: none of its {n} scans has a valid beam (all +inf, nan or 0): no scan to draw for "
                         "Fig. 9")
 
