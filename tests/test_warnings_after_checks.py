@@ -53,8 +53,8 @@ def test_a_damaged_line_after_a_millimetre_logs_first_scans_is_its_error_alone(l
 
 
 def test_a_held_warning_is_said_once_where_the_work_reads_the_file_again(logs) -> None:
-    """Leaving the held block resets warnings' registries: a log checked, then read again by the work
-    (emulate --log replays it), said its units warning twice. Said again through the filters, it is once."""
+    """catch_warnings reset warnings' registries as the held block ended: a log checked, then read again by
+    the work (emulate --log replays it), said its units warning twice. Only its showing is held now: once."""
     import warnings
 
     from experiments.options import warnings_after_checks
