@@ -1156,25 +1156,6 @@ def test_the_cli_runs_out_dot_in_the_current_folder_and_says_repeated_draws_once
     assert "0 failed" in out
 
 
-def test_an_unreachable_scheduler_after_repeated_draws_is_its_error_alone(tmp_path, monkeypatch, capsys):
-    """The scheduler is reached within the checks, before their warnings are said: an unreachable one
-    said the repeated-draws warning, then 'Timed out trying to connect' (a user error is one line)."""
-    import experiments.sweep.runner as runner
-    from experiments.cli import main
-
-    def unreachable(executor, workers):
-        raise OSError(f"Timed out trying to connect to {executor} after 10 s")
-
-    monkeypatch.setattr(runner, "sweep_client", unreachable)
-    spec = tmp_path / "few.yaml"
-    spec.write_text(yaml.safe_dump({"name": "few", "kind": KIND, "fixed": {"log": str(tmp_path / "log.txt")},
-                                    "random": {"x": {"int": [4, 6]}}, "samples": 8, "sample_seed": 0, "seeds": [0]}))
-    assert main(["sweep", str(spec), "--scheduler", "tcp://127.0.0.1:1", "--no-progress",
-                 "--out", str(tmp_path / "o")]) == 2
-    assert capsys.readouterr().err == "lmsbench sweep: error: Timed out trying to connect to tcp://127.0.0.1:1 after 10 s\n"
-    assert not (tmp_path / "o").exists()  # nothing written
-
-
 @pytest.mark.parametrize("extra", [
     {"grid": {"x": [1, "auto"]}},  # stored as text ('1'): it was refused as 'no cell of its sweep.yaml'
     {"random": {"c": {"choice": [1, "auto"]}}, "samples": 4},

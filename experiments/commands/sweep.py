@@ -7,11 +7,9 @@ Exit status: 0 when every cell succeeded, 1 when any failed (the table is writte
 from __future__ import annotations
 
 import argparse
-import contextlib
 import os
 import sys
 from pathlib import Path
-from typing import Any
 
 from experiments.options import SWEEP_OUTPUTS, SWEEP_OWNER, InputError, check_link, check_out, check_out_spares, check_yaml, count, path_arg, real_path, text, warnings_after_checks
 from lms200.yamlio import SWEEP_SIZE_HINT
@@ -35,7 +33,7 @@ def run(args: argparse.Namespace) -> int:
     from experiments.sweep import SweepSpecError, load_sweep, run_sweep
     from experiments.sweep.runner import spec_record
 
-    executor: Any = "inprocess" if args.inprocess else (args.scheduler if args.scheduler is not None else "local")
+    executor = "inprocess" if args.inprocess else (args.scheduler if args.scheduler is not None else "local")
     if args.workers is not None and executor != "local":  # it was ignored
         instead = "--inprocess runs in this process" if args.inprocess else "--scheduler has workers of its own"
         raise InputError(f"--workers sets the processes of the local cluster; {instead}")
@@ -45,41 +43,34 @@ def run(args: argparse.Namespace) -> int:
     check_executor(executor, args.workers)  # a --scheduler that is no address
     # the options first, then the sweep file, whose reading may warn (an old spelling): `--workers 3 --inprocess`
     # said that warning, then its error (a user error is one line)
-    with contextlib.ExitStack() as stack:
-        with warnings_after_checks():  # a refused run is its error alone, without a warning of what it read
-            check_yaml(args.sweep, "a sweep file", size_hint=SWEEP_SIZE_HINT)
-            spec = load_sweep(args.sweep)
-            out = args.out = args.out or Path("results/sweeps") / spec.name  # named if a reader of stdout that goes away stops it
-            check_link(out)  # a loop of links is said by name (real_path below leaves it as it is)
-            # `sweep DIR/sweep.yaml --out DIR` lost a user's comments; the sweep.yaml a run wrote, as it wrote it, may
-            # be run again (it is rewritten the same)
-            own = real_path(args.sweep) == real_path(out / "sweep.yaml") and Path(args.sweep).read_text() == spec_record(spec)
-            check_out_spares(out, SWEEP_OUTPUTS.files, [] if own else [args.sweep])
-            check_out(out, writes=SWEEP_OUTPUTS, owner=SWEEP_OWNER)
-            _check_same_sweep(out, spec.name)
-            try:
-                check_spec(spec)
-            except SweepSpecError as exc:  # an unknown kind or parameter name
-                raise SweepSpecError(f"{args.sweep}: {exc}") from exc
-            if executor not in ("local", "inprocess"):
-                # reached before the checks' warnings are said: an unreachable --scheduler said the sweep file's
-                # repeated-draws warning, then 'Timed out trying to connect' (a user error is one line)
-                from experiments.sweep import runner
-
-                executor = stack.enter_context(runner.sweep_client(executor, args.workers))  # a Client, used as is
-        if spec.kind in ("extract", "slam") and executor in ("local", "inprocess"):
-            # compile once here (the workers then load the cache), not in every worker at the same time; a slam
-            # sweep's SLAM kernels too (slam_vs_noise's first cell spent 36 s compiling them in the workers, unsaid)
-            from experiments.progress import warm_up_kernels
-
-            warm_up_kernels(slam=spec.kind == "slam")
+    with warnings_after_checks():  # a refused run is its error alone, without a warning of what it read
+        check_yaml(args.sweep, "a sweep file", size_hint=SWEEP_SIZE_HINT)
+        spec = load_sweep(args.sweep)
+        out = args.out = args.out or Path("results/sweeps") / spec.name  # named if a reader of stdout that goes away stops it
+        check_link(out)  # a loop of links is said by name (real_path below leaves it as it is)
+        # `sweep DIR/sweep.yaml --out DIR` lost a user's comments; the sweep.yaml a run wrote, as it wrote it, may
+        # be run again (it is rewritten the same)
+        own = real_path(args.sweep) == real_path(out / "sweep.yaml") and Path(args.sweep).read_text() == spec_record(spec)
+        check_out_spares(out, SWEEP_OUTPUTS.files, [] if own else [args.sweep])
+        check_out(out, writes=SWEEP_OUTPUTS, owner=SWEEP_OWNER)
+        _check_same_sweep(out, spec.name)
         try:
-            # `--out .` (or `sub/..`) names the current folder as text ("" is refused by path_arg); the library takes
-            # it only as an absolute path (Path("") is Path("."), so run_sweep refuses both)
-            result = run_sweep(spec, Path.cwd() if os.path.abspath(out) == os.getcwd() else out, executor, workers=args.workers, retry_failed=args.retry_failed,
-                               progress=not args.no_progress, checked=True)  # checked above: its warnings were said once
-        except SweepSpecError as exc:  # an unknown kind or parameter name, found before any cell ran
+            check_spec(spec)
+        except SweepSpecError as exc:  # an unknown kind or parameter name
             raise SweepSpecError(f"{args.sweep}: {exc}") from exc
+    if spec.kind in ("extract", "slam") and executor in ("local", "inprocess"):
+        # compile once here (the workers then load the cache), not in every worker at the same time; a slam
+        # sweep's SLAM kernels too (slam_vs_noise's first cell spent 36 s compiling them in the workers, unsaid)
+        from experiments.progress import warm_up_kernels
+
+        warm_up_kernels(slam=spec.kind == "slam")
+    try:
+        # `--out .` (or `sub/..`) names the current folder as text ("" is refused by path_arg); the library takes
+        # it only as an absolute path (Path("") is Path("."), so run_sweep refuses both)
+        result = run_sweep(spec, Path.cwd() if os.path.abspath(out) == os.getcwd() else out, executor, workers=args.workers, retry_failed=args.retry_failed,
+                           progress=not args.no_progress, checked=True)  # checked above: its warnings were said once
+    except SweepSpecError as exc:  # an unknown kind or parameter name, found before any cell ran
+        raise SweepSpecError(f"{args.sweep}: {exc}") from exc
     if result.failed:  # said first on stderr: a stdout whose reader went away stops at the summary below
         print(f"lmsbench sweep: {result.failed} of {result.total} cells failed (their `error` column says why; "
               f"--retry-failed computes them again)", file=sys.stderr)
