@@ -38,7 +38,9 @@ dropout_prob the nan rate, no_return_prob the surface no-return rate, max_readin
 
 from __future__ import annotations
 
+import io
 import math
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterator, Sequence
@@ -273,11 +275,12 @@ def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_
     # the reader's warnings (ranges in millimetres, a damaged line skipped) are said once the log is measured:
     # a log refused here (a malformed line after scan 50, too few straight runs) is its error alone (it said the
     # units warning, then the error: two lines for a user error)
+    skips = io.StringIO()  # what --skip-bad-lines skipped, said with the held warnings (a refused run: its error alone)
     with warnings_after_checks():
         try:  # the log's errors (reading it, measuring it) name it; the fit's own errors are not the log's
             cal = calibrate_scans(scans())
             if report_skips:
-                report_skipped(reader)
+                report_skipped(reader, stream=skips)
             problem = units.problem()
             if problem is not None and not np.isfinite(cal.noise.sigma_m):  # the units are why (base_sensor's error)
                 raise LmsbenchError(f"too few straight runs of beams at 1-4 m in {cal.n_scans} scan(s) to estimate the "
@@ -291,6 +294,7 @@ def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_
             raise _naming(exc, path) from None
         except ValueError as exc:
             raise InputError(f"{path}: {exc}") from None
+    sys.stderr.write(skips.getvalue())
     return fit_sensor(cal, world, fit_duration)
 
 

@@ -694,6 +694,9 @@ def warnings_after_checks() -> Iterator[None]:
     old spelling's warning, then the rate's error (every user error is one line). Only the showing is
     held: the filters are left as they are (a user's cell module that silences its own warnings when a
     check imports it keeps them silenced; ``catch_warnings`` put the filters back as they were)."""
+    if threading.current_thread() is not threading.main_thread():  # showwarning is the process's: a thread's
+        yield  # swap could be undone out of order by another's, and every later warning held for ever
+        return
     held: list[tuple[Any, ...]] = []
     say = warnings.showwarning
 

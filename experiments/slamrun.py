@@ -9,6 +9,7 @@ metrics.json (scores, timing, consistency, the loop closures), config.yaml, slam
 from __future__ import annotations
 
 import dataclasses
+import io
 import json
 import time
 from dataclasses import dataclass, field
@@ -269,7 +270,9 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     if getattr(reader, "stats", None) is not None and (reader.stats.skipped or reader.stats.stopped):
         from experiments.logargs import report_skipped
 
-        report_skipped(reader)
+        skips = io.StringIO()  # a note each line: the command says them once its checks pass (a refused
+        report_skipped(reader, stream=skips)  # run is its error alone)
+        notes.extend(skips.getvalue().splitlines())
     if not records:
         raise LmsbenchError(f"{log}: no laser scans found")
     if n_read > 1 and not timed:  # it ran: every step predicted no motion and searched no turn

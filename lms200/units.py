@@ -40,9 +40,10 @@ class RangeUnitsWarning(LmsbenchWarning):
     """A source's first scans look like ranges in millimetres given as metres (:func:`units_problem`)."""
 
 
-class _Tally:
-    """What :func:`units_problem` asks of a source's first scans, added up scan by scan (no scan is
-    held: a pass's first 50 scans of 10,000 beams each held 4 MB, and their joined copies 18 MB)."""
+class UnitsTally:
+    """What :func:`units_problem` asks of a source's first scans, added up scan by scan (``add``, then
+    ``problem``; no scan is held: a pass's first 50 scans of 10,000 beams each held 4 MB, and their
+    joined copies 18 MB); callers that read a source themselves (``experiments.calibrate``) tally it."""
 
     def __init__(self) -> None:
         self.scans = self.readings = self.in_range = 0
@@ -99,22 +100,17 @@ def units_problem(scans: Iterable[Scan]) -> str | None:
     value, +inf is no finite reading, and real readings beyond a ``range_max`` set short lie within a
     few tens of metres, below NEAREST_SCENE_M once divided; any valid beam in any scan ends the doubt.
     The scans are looked at one by one, none held."""
-    tally = _Tally()
+    tally = UnitsTally()
     for scan in scans:
         tally.add(scan)
     return tally.problem()
-
-
-#: :func:`units_problem` added up by the caller, scan by scan (``add``, then ``problem``): a pass over a
-#: source that holds no scan (``experiments.calibrate``'s measurement) tells its units at its end
-UnitsTally = _Tally
 
 
 def units_evidence(scans: Iterable[Scan]) -> str | None:
     """:func:`units_problem` without its opening (none of the first N scans has a valid beam), for an
     error that says that itself: ``slam MM_LOG`` said the units warning, then its own 'none of its N
     scans has a valid beam' (two lines for a user error); it says the units in its one line."""
-    tally = _Tally()
+    tally = UnitsTally()
     for scan in scans:
         tally.add(scan)
     return tally.evidence()
@@ -136,7 +132,7 @@ def units_watched(records: Iterable[Record], where: str) -> Iterator[Record]:
     """``records`` as they come, their first UNITS_SCANS scans (all of a pass with fewer, once it
     ends) looked at by :func:`units_problem`, one by one (none held), and said by :func:`warn_units`:
     a reader's pass warns once, and a pass stopped before then does not."""
-    tally = _Tally()
+    tally = UnitsTally()
     for rec in records:
         if tally.scans < UNITS_SCANS:
             tally.add(rec.scan)

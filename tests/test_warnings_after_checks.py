@@ -43,7 +43,8 @@ def _refused(argv: list[str], capsys: pytest.CaptureFixture[str]) -> str:
 
 
 @pytest.mark.parametrize("argv", [["slam", "{log}", "--out", "{tmp}/out"], ["info", "{log}"],
-                                  ["calibrate", "{log}", "--out", "{tmp}/s.yaml"], ["lms200", "emulate", "--log", "{log}"]])
+                                  ["calibrate", "{log}", "--out", "{tmp}/s.yaml"],
+                                  ["lms200", "emulate", "--log", "{log}", "--tcp", "0", "--duration", "1"]])
 def test_a_damaged_line_after_a_millimetre_logs_first_scans_is_its_error_alone(logs, tmp_path, capsys, argv) -> None:
     """The reader warns of the units after 50 scans, then meets the damaged line: that warning, then the
     error (two lines for a user error)."""
@@ -88,3 +89,21 @@ def test_slams_own_warning_before_an_odometry_refusal_is_unsaid(logs, tmp_path, 
     then the odometry's error."""
     line = _refused(["slam", str(logs["still"]), "--odometry", "--out", str(tmp_path / "out")], capsys)
     assert line == f"lmsbench slam: error: {logs['still']}: --odometry needs odometry on every scan, and this input has none"
+
+
+@pytest.mark.parametrize("command", [["slam", "--out", "{tmp}/out"], ["calibrate", "--out", "{tmp}/s.yaml"]])
+def test_what_skip_bad_lines_skipped_is_held_with_the_warnings(logs, tmp_path, capsys, command) -> None:
+    """`--skip-bad-lines` printed its report of the lines skipped as it read, inside the held checks: a
+    refused run said it, then its error (review of round 11)."""
+    line = _refused([command[0], str(logs["mmbad"]), "--skip-bad-lines", *(a.format(tmp=tmp_path) for a in command[1:])],
+                    capsys)
+    assert line.startswith(f"lmsbench {command[0]}: error: ") and "millimetres" in line, line
+
+
+def test_a_held_warning_is_said_when_the_checks_pass(logs, capsys) -> None:
+    """The held warnings of a run that goes on are said, once: `info` of a log in millimetres."""
+    from experiments.cli import main
+
+    assert main(["info", str(logs["mm"])]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and "warning:" in err[0] and "millimetres" in err[0], err
