@@ -16,7 +16,7 @@ import numpy as np
 from lms200 import LmsbenchError
 from lms200.codes import real_rows
 from lms200.errors import InputError
-from lms200.finite import check_seed, digit_limit_problem, is_number, seed_problem, shown
+from lms200.finite import check_seed, digit_limit_problem, is_number, seed_problem, shown, underflow_problem
 
 from .geometry import distance_to_segments, face_corners, rectangle_corners, union_faces
 from .walls_only import box_thickness, orient_walls, unreproduced
@@ -78,6 +78,16 @@ def world_json_text(data: bytes) -> str:
         raise ValueError(f"not UTF-8 text (byte {exc.start} is not UTF-8)") from None
 
 
+def _nonzero_float(text: str) -> float:
+    """A JSON number with a fraction or exponent as ``json`` reads it, ValueError where it is written
+    nonzero and reads as 0 (``lms200.finite.underflow_problem``: it was taken as 0 without a word)."""
+    value = float(text)
+    problem = underflow_problem(text, value)
+    if problem:
+        raise ValueError(problem)
+    return value
+
+
 def world_json_content(text: str) -> dict:
     """The mapping a world.json's text holds, for :meth:`World.from_json` and slam's reader of a
     simulate folder: ValueError / TypeError for text that is no JSON mapping, for a key given twice
@@ -85,8 +95,8 @@ def world_json_content(text: str) -> dict:
     (``"cylinder"``) or a second ``"cylinders": []`` left the pillars out of the simulation (or the
     walls out of slam's map score) without a word, exit 0. Text nested too deeply for ``json``
     (``[[[[...]]]]`` 100,000 deep) is a ValueError too: its RecursionError was slam's internal error."""
-    try:
-        d = json.loads(text, object_pairs_hook=_unique_keys)
+    try:  # a number written nonzero that reads as 0 (1e-400: a radius or a wall end at 0) is refused
+        d = json.loads(text, object_pairs_hook=_unique_keys, parse_float=_nonzero_float)
     except RecursionError:
         raise ValueError("nested too deeply to parse") from None
     except ValueError as exc:  # Python's own limit: "... use sys.set_int_max_str_digits() to increase the limit"

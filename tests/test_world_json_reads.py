@@ -100,6 +100,21 @@ def test_a_world_json_number_of_too_many_digits_names_no_python_setting(tmp_path
                               f"{sys.get_int_max_str_digits()} digits, which no field takes)")
 
 
+def test_a_world_json_number_written_nonzero_that_reads_as_zero_is_refused(tmp_path) -> None:
+    """1e-400 in a world.json was read as 0 without a word (a wall end, a radius), as YAML's was before
+    round 11; a zero written as one, 0e-400, reads as before."""
+    from lms200 import LmsbenchError
+    from sim import World
+
+    (tmp_path / "w.json").write_text('{"walls": [[0, 0, 4, 1e-400], [4, 0, 4, 3]]}')
+    with pytest.raises(LmsbenchError) as err:
+        World.from_json(tmp_path / "w.json")
+    assert str(err.value) == (f"{tmp_path / 'w.json'}: not a world.json (1e-400 rounds to 0 in float64 (its smallest "
+                              "nonzero number is 4.9e-324); write 0 for zero)")
+    (tmp_path / "w.json").write_text('{"walls": [[0, 0e-400, 4, 0.001], [4, 0, 4, 3]]}')
+    assert len(World.from_json(tmp_path / "w.json").walls) >= 2
+
+
 def test_a_world_json_is_utf8_with_or_without_a_byte_order_mark(folder, tmp_path) -> None:
     """fuzz4: a world.json saved with a byte-order mark (a Windows editor), or naming its world "Büro", was
     "'ascii' codec can't decode byte 0xef in position 0" for simulate and compare (read as ASCII), and the
