@@ -1027,6 +1027,13 @@ def _require(ok: bool, reason: str) -> None:
         raise ValueError(reason)
 
 
+def _word(word: str) -> str:
+    """A log's word quoted for a message: the reader decodes ASCII, each other byte a replacement
+    character, which a quote alone showed as mojibake ('\ufffd\ufffd' for an Arabic-Indic digit's two bytes)."""
+    n = word.count("\ufffd")
+    return f"{word!r} ({n} byte{'s' * (n != 1)} not ASCII, each shown as U+FFFD)" if n else repr(word)
+
+
 def _floats(words: list[str], what: str) -> np.ndarray:
     """Numbers as CARMEN's strtod reads them: Python's float() also takes ``1_000`` (read as 1000 m)
     and turns ``1e400`` into inf, which CARMEN does not: both make the line malformed (a review's
@@ -1038,7 +1045,7 @@ def _floats(words: list[str], what: str) -> np.ndarray:
         values = np.array(words, dtype=np.float64)
     except ValueError:
         bad = next(w for w in words if not _is_number(w))
-        raise ValueError(f"{what}: {bad!r} is not a number") from None
+        raise ValueError(f"{what}: {_word(bad)} is not a number") from None
     infinite = np.isinf(values)
     if infinite.any():
         for i in np.flatnonzero(infinite):
@@ -1165,7 +1172,7 @@ def _count(word: str, what: str) -> int:
             float(word)
             _require("_" not in word, "")
         except ValueError:
-            raise ValueError(f"{what} {word!r} is not a number") from None
+            raise ValueError(f"{what} {_word(word)} is not a number") from None
         raise ValueError(f"{what} must be a non-negative integer written in digits, got {word!r}")
     return int(word)
 

@@ -71,6 +71,17 @@ def test_a_bad_word_is_still_named_by_floats_message(tmp_path) -> None:
                                     (3, "ODOM: ODOM: '1e400' is beyond float64's range")]
 
 
+def test_a_word_of_bytes_that_are_not_ascii_is_said_so(tmp_path) -> None:
+    """An Arabic-Indic digit (two UTF-8 bytes) read as two replacement characters was quoted alone: '\ufffd\ufffd'
+    is not a number, mojibake on a terminal (round 11's probe)."""
+    path = tmp_path / "ar.log"
+    path.write_bytes(_flaser("1.00 2.00", 1.0).encode() + _flaser("1.00 \u0663", 2.0).encode("utf-8"))
+    reader = read_log(path, skip_bad_lines=True)
+    assert len(list(reader)) == 1
+    assert reader.stats.skipped == [(2, "FLASER: FLASER ranges: '\ufffd\ufffd' (2 bytes not ASCII, each shown as "
+                                        "U+FFFD) is not a number")]
+
+
 def test_the_range_words_kept_are_bounded() -> None:
     cache = _RangeWords()
     words = [f"{i / 1000:.3f}" for i in range(MAX_CACHED_WORDS + 1000)]
