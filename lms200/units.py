@@ -100,20 +100,22 @@ def units_problem(scans: Iterable[Scan]) -> str | None:
     value, +inf is no finite reading, and real readings beyond a ``range_max`` set short lie within a
     few tens of metres, below NEAREST_SCENE_M once divided; any valid beam in any scan ends the doubt.
     The scans are looked at one by one, none held."""
-    tally = UnitsTally()
-    for scan in scans:
-        tally.add(scan)
-    return tally.problem()
+    return _tallied(scans).problem()
 
 
 def units_evidence(scans: Iterable[Scan]) -> str | None:
     """:func:`units_problem` without its opening (none of the first N scans has a valid beam), for an
     error that says that itself: ``slam MM_LOG`` said the units warning, then its own 'none of its N
     scans has a valid beam' (two lines for a user error); it says the units in its one line."""
+    return _tallied(scans).evidence()
+
+
+def _tallied(scans: Iterable[Scan]) -> UnitsTally:
+    """``scans`` added to a new :class:`UnitsTally`, one by one."""
     tally = UnitsTally()
     for scan in scans:
         tally.add(scan)
-    return tally.evidence()
+    return tally
 
 
 def warn_units(scans: Iterable[Scan], where: str) -> None:

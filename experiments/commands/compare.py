@@ -192,7 +192,7 @@ def run(args: argparse.Namespace) -> int:
     # what produced each source's scans: the sensor that was simulated (interlaced or not), the log read
     resolved["scans_from"] = [dict(name=src.name, kind=src.kind, **src.settings) for src in sources]
     resolved["versions"] = versions()
-    from experiments.figures.realdata import figure_stem
+    from experiments.figures.realdata import fig_explained_vs_lines, figure_stem
 
     drawn = [src for src in sources if src.kind == "log" and src.name in set(summary["source"])]  # a figure each
     # the files of the logs' figures, named by the log (realdata_*), listed before they are written: the next run
@@ -218,8 +218,6 @@ def run(args: argparse.Namespace) -> int:
     write_record(args.out / "summary.txt", text + "\n")
     figures = []
     for src in drawn:
-        from experiments.figures.realdata import fig_explained_vs_lines
-
         figures += [str(p) for p in fig_explained_vs_lines(summary, src.name, figure_stem(args.out, src.name))]
     args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     if run_folder:

@@ -19,6 +19,7 @@ import warnings
 from typing import Any, Callable
 
 from lms200.errors import LmsbenchWarning
+from lms200.finite import printable
 
 from .spec import RUNNER_COLUMNS, Scalar, SweepSpecError
 
@@ -135,15 +136,6 @@ def run_cell(kind: str, params: dict[str, Scalar], fn: CellFn | None = None) -> 
     return row
 
 
-def _utf8(text: str) -> bool:
-    """``text`` is writable as UTF-8 (no lone surrogate)."""
-    try:
-        text.encode("utf-8")
-    except UnicodeEncodeError:
-        return False
-    return True
-
-
 def _check_metrics(kind: str, metrics: dict[Any, Any]) -> None:
     """Raise (the cell fails, its error recorded) for a metric a sweep's table cannot hold: a name that
     is no plain name (:func:`metric_name_problem`), a value that is no scalar (a number, text, a
@@ -166,7 +158,7 @@ def _check_metrics(kind: str, metrics: dict[Any, Any]) -> None:
         if isinstance(value, np.floating) and value.dtype.itemsize > 8:
             raise TypeError(f"cell kind {kind!r} returned metric {name!r} as {type(value).__name__}, wider than the "
                             "float64 a sweep's table holds; return float(value)")
-        if isinstance(value, str) and not _utf8(value):
+        if isinstance(value, str) and printable(value) != value:  # as spec._check_scalar tells a parameter's
             raise ValueError(f"cell kind {kind!r} returned metric {name!r} as text that is no UTF-8 (a lone surrogate, as "
                              "os.fsdecode gives for undecodable bytes): a sweep's table cannot hold it")
         if (beyond := table_int_problem(value)) is not None:
