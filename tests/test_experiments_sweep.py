@@ -24,7 +24,7 @@ import yaml
 from experiments.sweep import SweepSpec, SweepSpecError, cell_key, load_sweep, run_sweep
 from experiments.sweep.cells import INPUTS_KEY
 from experiments.sweep.runner import check_spec
-from lms200.errors import LmsbenchWarning
+from lms200.errors import LmsbenchError, LmsbenchWarning
 
 REPO = Path(__file__).resolve().parents[1]
 KIND = f"{Path(__file__).stem}:square"
@@ -1154,6 +1154,65 @@ def test_the_cli_runs_out_dot_in_the_current_folder_and_says_repeated_draws_once
     assert err.count("random draws (samples:) repeat an earlier draw") == 1, err  # the CLI says warnings on stderr
     assert (here / "results.parquet").is_file() and (here / "cells").is_dir()
     assert "0 failed" in out
+
+
+def test_an_unreachable_scheduler_is_its_error_alone_and_a_finished_sweep_never_reaches_it(tmp_path, monkeypatch, capsys):
+    """The scheduler is reached within the checks, before their warnings are said, where cells remain: an
+    unreachable one said the repeated-draws warning, then 'Timed out trying to connect' (a user error is one
+    line). A finished sweep does not reach it (connecting within the checks, a first fix, made it fail there
+    where it had said '0 computed, 3 already done'); its count of cells left comes from the folder's cells."""
+    import contextlib
+
+    import experiments.sweep.runner as runner
+    from experiments.cli import main
+
+    reached = []
+
+    @contextlib.contextmanager
+    def unreachable(executor, workers):
+        reached.append(executor)
+        raise OSError(f"Timed out trying to connect to {executor} after 10 s")
+        yield
+
+    monkeypatch.setattr(runner, "sweep_client", unreachable)
+    log = tmp_path / "log.txt"
+    spec = tmp_path / "few.yaml"
+    spec.write_text(yaml.safe_dump({"name": "few", "kind": KIND, "fixed": {"log": str(log)},
+                                    "random": {"x": {"int": [4, 6]}}, "samples": 8, "sample_seed": 0, "seeds": [0]}))
+    remote = ["sweep", str(spec), "--scheduler", "tcp://127.0.0.1:1", "--no-progress", "--out", str(tmp_path / "o")]
+    assert main(remote) == 2
+    assert capsys.readouterr().err == "lmsbench sweep: error: Timed out trying to connect to tcp://127.0.0.1:1 after 10 s\n"
+    assert not (tmp_path / "o").exists() and reached == ["tcp://127.0.0.1:1"]  # nothing written
+    assert main(["sweep", str(spec), "--inprocess", "--no-progress", "--out", str(tmp_path / "o")]) == 0
+    capsys.readouterr()
+    assert main(remote) == 0  # finished: the scheduler is not reached
+    out, err = capsys.readouterr()
+    assert "3 cells, 0 computed, 3 already done, 0 failed" in out and len(reached) == 1
+    assert err.count("repeat an earlier draw") == 1 and "Timed out" not in err
+    (tmp_path / "o" / "cells" / sorted(os.listdir(tmp_path / "o" / "cells"))[0]).unlink()  # one cell left
+    assert main(remote) == 2 and len(reached) == 2
+    assert capsys.readouterr().err.count("\n") == 1
+
+
+def test_a_plan_counts_the_cells_left_without_writing(tmp_path):
+    """plan_sweep reads the folder's finished cells and writes nothing; run_sweep takes it (read once) and
+    refuses a plan of another run."""
+    from experiments.sweep.runner import check_spec, plan_sweep
+
+    log = tmp_path / "log.txt"
+    spec = make_spec(log, xs=[0, 1, 2], seeds=[0])
+    fn = check_spec(spec)
+    plan = plan_sweep(spec, tmp_path / "o", fn)
+    assert len(plan.todo) == 3 and plan.skipped == 0 and not (tmp_path / "o").exists()
+    run_sweep(make_spec(log, xs=[1], seeds=[0]), tmp_path / "o", "inprocess", progress=False)
+    before = sorted(p.name for p in (tmp_path / "o").rglob("*"))
+    plan = plan_sweep(spec, tmp_path / "o", fn)
+    assert [params["x"] for _, params in plan.todo] == [0, 2] and plan.skipped == 1
+    assert sorted(p.name for p in (tmp_path / "o").rglob("*")) == before
+    with pytest.raises(LmsbenchError, match="plan: must be plan_sweep"):
+        run_sweep(spec, tmp_path / "o", "inprocess", progress=False, plan=plan_sweep(spec, tmp_path / "p", fn))
+    result = run_sweep(spec, tmp_path / "o", "inprocess", progress=False, plan=plan)
+    assert (result.computed, result.skipped) == (2, 1) and computed(log) == ["1 0", "0 0", "2 0"]
 
 
 @pytest.mark.parametrize("extra", [

@@ -7,6 +7,7 @@ Exit status: 0 when every cell succeeded, 1 when any failed (the table is writte
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 from pathlib import Path
@@ -38,39 +39,47 @@ def run(args: argparse.Namespace) -> int:
         instead = "--inprocess runs in this process" if args.inprocess else "--scheduler has workers of its own"
         raise InputError(f"--workers sets the processes of the local cluster; {instead}")
     args.workers = args.workers or 2
-    from experiments.sweep.runner import check_executor, check_spec
+    from experiments.sweep.runner import check_executor, check_spec, plan_sweep, sweep_client
 
     check_executor(executor, args.workers)  # a --scheduler that is no address
     # the options first, then the sweep file, whose reading may warn (an old spelling): `--workers 3 --inprocess`
     # said that warning, then its error (a user error is one line)
-    with warnings_after_checks():  # a refused run is its error alone, without a warning of what it read
-        check_yaml(args.sweep, "a sweep file", size_hint=SWEEP_SIZE_HINT)
-        spec = load_sweep(args.sweep)
-        out = args.out = args.out or Path("results/sweeps") / spec.name  # named if a reader of stdout that goes away stops it
-        check_link(out)  # a loop of links is said by name (real_path below leaves it as it is)
-        # `sweep DIR/sweep.yaml --out DIR` lost a user's comments; the sweep.yaml a run wrote, as it wrote it, may
-        # be run again (it is rewritten the same)
-        own = real_path(args.sweep) == real_path(out / "sweep.yaml") and Path(args.sweep).read_text() == spec_record(spec)
-        check_out_spares(out, SWEEP_OUTPUTS.files, [] if own else [args.sweep])
-        check_out(out, writes=SWEEP_OUTPUTS, owner=SWEEP_OWNER)
-        _check_same_sweep(out, spec.name)
-        try:
-            check_spec(spec)
-        except SweepSpecError as exc:  # an unknown kind or parameter name
-            raise SweepSpecError(f"{args.sweep}: {exc}") from exc
-    if spec.kind in ("extract", "slam") and executor in ("local", "inprocess"):
-        # compile once here (the workers then load the cache), not in every worker at the same time; a slam
-        # sweep's SLAM kernels too (slam_vs_noise's first cell spent 36 s compiling them in the workers, unsaid)
-        from experiments.progress import warm_up_kernels
+    with contextlib.ExitStack() as stack:
+        with warnings_after_checks():  # a refused run is its error alone, without a warning of what it read
+            check_yaml(args.sweep, "a sweep file", size_hint=SWEEP_SIZE_HINT)
+            spec = load_sweep(args.sweep)
+            out = args.out = args.out or Path("results/sweeps") / spec.name  # named if a reader of stdout that goes away stops it
+            check_link(out)  # a loop of links is said by name (real_path below leaves it as it is)
+            # `sweep DIR/sweep.yaml --out DIR` lost a user's comments; the sweep.yaml a run wrote, as it wrote it, may
+            # be run again (it is rewritten the same)
+            own = real_path(args.sweep) == real_path(out / "sweep.yaml") and Path(args.sweep).read_text() == spec_record(spec)
+            check_out_spares(out, SWEEP_OUTPUTS.files, [] if own else [args.sweep])
+            check_out(out, writes=SWEEP_OUTPUTS, owner=SWEEP_OWNER)
+            _check_same_sweep(out, spec.name)
+            try:
+                fn = check_spec(spec)
+            except SweepSpecError as exc:  # an unknown kind or parameter name
+                raise SweepSpecError(f"{args.sweep}: {exc}") from exc
+            # `--out .` (or `sub/..`) names the current folder as text ("" is refused by path_arg); the library takes
+            # it only as an absolute path (Path("") is Path("."), so run_sweep refuses both)
+            folder = Path.cwd() if os.path.abspath(out) == os.getcwd() else out
+            plan = plan_sweep(spec, folder, fn, args.retry_failed)  # the cells left, from the folder's cell files
+            if plan.todo and executor not in ("local", "inprocess"):
+                # reached within the checks, before their warnings are said: an unreachable --scheduler said the
+                # repeated-draws warning, then 'Timed out trying to connect' (a user error is one line); only where
+                # cells remain: a finished sweep ('0 computed, 2 already done') needs no scheduler
+                executor = stack.enter_context(sweep_client(executor, args.workers))  # a Client, used as is
+        if spec.kind in ("extract", "slam") and executor in ("local", "inprocess") and plan.todo:
+            # compile once here (the workers then load the cache), not in every worker at the same time; a slam
+            # sweep's SLAM kernels too (slam_vs_noise's first cell spent 36 s compiling them in the workers, unsaid)
+            from experiments.progress import warm_up_kernels
 
-        warm_up_kernels(slam=spec.kind == "slam")
-    try:
-        # `--out .` (or `sub/..`) names the current folder as text ("" is refused by path_arg); the library takes
-        # it only as an absolute path (Path("") is Path("."), so run_sweep refuses both)
-        result = run_sweep(spec, Path.cwd() if os.path.abspath(out) == os.getcwd() else out, executor, workers=args.workers, retry_failed=args.retry_failed,
-                           progress=not args.no_progress, checked=True)  # checked above: its warnings were said once
-    except SweepSpecError as exc:  # an unknown kind or parameter name, found before any cell ran
-        raise SweepSpecError(f"{args.sweep}: {exc}") from exc
+            warm_up_kernels(slam=spec.kind == "slam")
+        try:
+            result = run_sweep(spec, folder, executor, workers=args.workers, retry_failed=args.retry_failed,
+                               progress=not args.no_progress, checked=True, plan=plan)  # checked above: its warnings were said once
+        except SweepSpecError as exc:  # an unknown kind or parameter name, found before any cell ran
+            raise SweepSpecError(f"{args.sweep}: {exc}") from exc
     if result.failed:  # said first on stderr: a stdout whose reader went away stops at the summary below
         print(f"lmsbench sweep: {result.failed} of {result.total} cells failed (their `error` column says why; "
               f"--retry-failed computes them again)", file=sys.stderr)

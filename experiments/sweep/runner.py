@@ -52,6 +52,50 @@ class SweepResult:
     out: Path
 
 
+@dataclass
+class SweepPlan:
+    """What a run of ``spec`` into the folder ``out`` has to compute, read from the folder's finished
+    cells without writing anything (:func:`plan_sweep`): the command line counts the cells left within
+    its checks, so that it reaches a ``--scheduler`` there only where cells remain, and hands the plan to
+    :func:`run_sweep`, which then reads the cells once."""
+
+    spec: SweepSpec
+    out: Path
+    retry_failed: bool
+    keys: list[str]  # every cell's key, in the sweep's order (a repeated draw's key repeated)
+    inputs_of: dict[str, Any]  # key -> the digests of the files the cell reads (None: a kind that reads none)
+    todo: list[tuple[str, dict[str, Scalar]]]  # the cells to compute, each once
+
+    @property
+    def skipped(self) -> int:
+        """Cells already finished in ``out``."""
+        return len(set(self.keys)) - len(self.todo)
+
+
+def plan_sweep(spec: SweepSpec, out: str | Path, fn: Any, retry_failed: bool = False) -> SweepPlan:
+    """The cells of ``spec`` that a run into ``out`` computes (:class:`SweepPlan`): those without a
+    finished cell file there (with ``retry_failed``, also those recorded as failed). Reads the digests
+    of the files the cells read (``fn.input_digests``) and each cell file's footer; writes nothing
+    (a folder without ``cells/`` has none finished).
+
+    Raises:
+        LmsbenchError: ``out/cells`` cannot be read, or cannot be written while cells remain.
+    """
+    out = _sweep_folder(out)
+    cells = spec.cells()
+    digests, seen = getattr(fn, "input_digests", None), {}  # the files a cell reads are part of its key
+    inputs = [digests(params, seen) if digests else None for params in cells]
+    keys = [cell_key(spec.kind, params, given) for params, given in zip(cells, inputs)]
+    store = CellStore(out, create=False)
+    done = store.done(dict(zip(keys, cells)))  # a cell file whose parameters were edited is computed again
+    if retry_failed:
+        done = {k for k in done if store.status(k) == "ok"}
+    todo = list({key: params for key, params in zip(keys, cells) if key not in done}.items())  # identical cells once
+    if todo and store.cells.is_dir():
+        store.check_writable()  # before any cell is computed (or a scheduler reached)
+    return SweepPlan(spec, out, retry_failed, keys, dict(zip(keys, inputs)), todo)
+
+
 def run_sweep(
     spec: SweepSpec,
     out: str | Path,
@@ -61,6 +105,7 @@ def run_sweep(
     retry_failed: bool = False,
     progress: bool = True,
     checked: bool = False,
+    plan: SweepPlan | None = None,
 ) -> SweepResult:
     """Compute every cell of ``spec`` not yet finished in ``out`` and write the tidy table.
 
@@ -75,6 +120,8 @@ def run_sweep(
         checked: ``spec`` has passed :func:`check_spec` already (the CLI checks it before compiling
             the kernels), so it is not checked again: a second check read its sensor files again
             and said each old-spelling warning twice.
+        plan: :func:`plan_sweep` of the same ``spec``, ``out`` and ``retry_failed``, made just before
+            (the command line's checks make it); None: made here.
 
     Returns:
         A :class:`SweepResult`; ``out/results.parquet`` and ``out/results.csv`` hold its table.
@@ -88,11 +135,15 @@ def run_sweep(
             raise LmsbenchError(f"{name}: must be True or False, got {shown(value, 60)}")
     check_executor(executor, workers)
     fn = resolve_kind(spec.kind) if checked else check_spec(spec)
-    cells = spec.cells()
+    if plan is None:
+        plan = plan_sweep(spec, out, fn, retry_failed)
+    elif not isinstance(plan, SweepPlan) or plan.spec is not spec or plan.out != out or plan.retry_failed != retry_failed:
+        raise LmsbenchError("plan: must be plan_sweep(spec, out, fn, retry_failed) of this run's spec, out and "
+                            f"retry_failed, got {shown(plan, 60)}")
     fresh = not out.exists() and not out.is_symlink()
     before = set() if fresh or not out.is_dir() else {p.name for p in out.iterdir()}
     try:
-        return _run_into(spec, CellStore(out), fn, cells, executor, workers, retry_failed, progress)
+        return _run_into(plan, CellStore(out), fn, executor, workers, progress)
     except Exception:
         _undo(out, fresh, before)
         raise
@@ -144,24 +195,15 @@ def _undo(out: Path, fresh: bool, before: set[str]) -> None:
             shutil.rmtree(entry, ignore_errors=True) if entry.is_dir() and not entry.is_symlink() else entry.unlink(missing_ok=True)
 
 
-def _run_into(spec: SweepSpec, store: CellStore, fn: Any, cells: list[dict[str, Scalar]], executor: Any, workers: int,
-              retry_failed: bool, progress: bool) -> SweepResult:
-    """:func:`run_sweep` into the folder of ``store``."""
-    out = store.root
+def _run_into(plan: SweepPlan, store: CellStore, fn: Any, executor: Any, workers: int, progress: bool) -> SweepResult:
+    """:func:`run_sweep` of ``plan`` into the folder of ``store``."""
+    out, spec, keys, inputs_of, todo = store.root, plan.spec, plan.keys, plan.inputs_of, plan.todo
+    digests = getattr(fn, "input_digests", None)
     from experiments.provenance import versions, write_record
 
-    record = spec_record(spec)
-    digests, seen = getattr(fn, "input_digests", None), {}  # the files a cell reads are part of its key
-    inputs = [digests(params, seen) if digests else None for params in cells]
-    keys = [cell_key(spec.kind, params, given) for params, given in zip(cells, inputs)]
-    inputs_of = dict(zip(keys, inputs))
-    done = store.done(dict(zip(keys, cells)))  # a cell file whose parameters were edited is computed again
-    if retry_failed:
-        done = {k for k in done if store.status(k) == "ok"}
-    todo = [(key, params) for key, params in zip(keys, cells) if key not in done]
-    todo = list({key: params for key, params in todo}.items())  # identical cells once
     if todo:
         store.check_writable()  # before any cell is computed
+    record = spec_record(spec)
     # every check first, then the first write: a run refused above (a cell folder not writable, a folder where a
     # cell's file goes, an input that cannot be read) rewrote sweep.yaml and versions.yaml and removed the
     # folder's table of the earlier sweep before it was refused
@@ -170,7 +212,7 @@ def _run_into(spec: SweepSpec, store: CellStore, fn: Any, cells: list[dict[str, 
             (out / name).unlink(missing_ok=True)  # sweep.yaml, drawn by `figures --sweep` as this one's, exit 0
     write_record(out / "sweep.yaml", record)  # whole: it tells the folder as the sweep's (SWEEP_OWNER)
     write_record(out / "versions.yaml", dump_yaml(versions(), sort_keys=False))  # of the last run into `out`
-    skipped = len(set(keys)) - len(todo)
+    skipped = plan.skipped
     counts = {"computed": 0, "failed": 0}
 
     bar = tqdm(total=len(set(keys)), initial=skipped, desc=spec.name, unit="cell", file=sys.stderr,

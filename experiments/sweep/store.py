@@ -36,9 +36,13 @@ RESULT_TABLES = ("results.parquet", "results.csv")  # the tables write_atomic wr
 class CellStore:
     """The finished cells of one sweep folder."""
 
-    def __init__(self, root: str | Path) -> None:
+    def __init__(self, root: str | Path, create: bool = True) -> None:
+        """The store of the sweep folder ``root``; ``create``: make its cells/ folder (and clear what a
+        kill left in it), else only read it (a sweep's checks count its cells left before any write)."""
         self.root = Path(root)
         self.cells = self.root / CELLS_DIR
+        if not create:
+            return
         self.cells.mkdir(parents=True, exist_ok=True)
         for stale in self.cells.glob(".*.tmp"):  # left by a kill between write and rename
             stale.unlink(missing_ok=True)
@@ -65,6 +69,8 @@ class CellStore:
         table as the cell's, the parameters it records beside metrics computed with others."""
         keys, damaged, foreign = set(), [], []  # foreign: a whole file of another cell's row (its `cell` not its name)
         edited: list[str] = []
+        if not self.cells.exists() and not self.cells.is_symlink():  # a new sweep (a store not created)
+            return keys
         if not os.access(self.cells, os.R_OK | os.X_OK):  # "sw/cells: permission denied" named no reason
             raise LmsbenchError(f"{self.cells}: the sweep's folder of finished cells cannot be read (permission "
                                 "denied); make it readable (chmod u+rx) to resume the sweep")
