@@ -14,7 +14,7 @@ import json
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Collection, Iterable
+from typing import Any, Callable, Collection, Iterable
 
 import numpy as np
 import yaml
@@ -306,7 +306,8 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         _check_truth_span(truth, records, sources["truth"])
     if rel is not None:
         try:
-            _check_relations_span(rel, records, sources["relations"], max_scans if len(records) == max_scans else None)
+            _check_relations_span(rel, records, sources["relations"], max_scans if len(records) == max_scans else None,
+                                  reader.last_stamp)
         except LmsbenchError as exc:
             if relations:  # given: the user's mistake, said before the run
                 raise
@@ -344,26 +345,40 @@ def _check_truth_span(truth: np.ndarray, records: list[Record], where: str) -> N
                             "(the ground truth of another run, or stamps of another clock?)")
 
 
-def _check_relations_span(relations: np.ndarray, records: list[Record], where: str, cut: int | None) -> None:
+def _check_relations_span(relations: np.ndarray, records: list[Record], where: str, cut: int | None,
+                          log_end: Callable[[], float | None] | None = None) -> None:
     """LmsbenchError naming the relations file, before any work, when none of its relations lies within
     the time span of the scans to run on (both stamps: the relations error scores no other), as
     ``_check_truth_span`` does for ground truth: another log's relations (MIT CSAIL's given with the
     Intel log) ran the whole SLAM, warned "the relations error covers 0 of the file's 1172 relations"
     and wrote metrics.json without a relations score, exit 0. ``cut``: the --max-scans that stopped
-    the read early; then relations after the last scan read may be the log's own, past the cut, and
-    are left to the run's warning (those before its first scan are not)."""
+    the read early; then the span is the whole log's, from its first scan read to its last stamp
+    (``log_end``: the reader's ``last_stamp``, asked only here), so that relations past the cut but
+    within the log are left to the run's note and warning, and relations outside the whole log are
+    refused as without the cut (they passed whenever they lay after the cut: another log's relations
+    ran the whole SLAM under --max-scans, exit 0). Where the log's last stamp cannot be told
+    (``log_end`` None or giving None), relations after the last scan read pass as the log's own, perhaps."""
     stamps = np.array([r.scan.stamp for r in records])
     lo, hi = float(stamps.min()), float(stamps.max())
     t1, t2 = relations[:, 0], relations[:, 1]
-    if np.any((np.minimum(t1, t2) >= lo - 1e-9) & (np.maximum(t1, t2) <= hi + 1e-9)):
+
+    def within(end: float) -> bool:
+        return bool(np.any((np.minimum(t1, t2) >= lo - 1e-9) & (np.maximum(t1, t2) <= end + 1e-9)))
+
+    if within(hi):
         return
     first, last = float(relations[:, :2].min()), float(relations[:, :2].max())
-    if cut is not None and last > hi:  # some lie past the cut: the log's own, perhaps (the run warns)
+    end = log_end() if cut is not None and log_end is not None and last > hi else None
+    if cut is not None and last > hi and (end is None or within(max(end, hi))):  # past the cut: the log's own (the run warns)
         return
-    scans = f"the {len(records)} scans read (at most {cut}, --max-scans)" if cut is not None else \
-        f"the log's {len(records)} scans to run on"
+    if cut is None:
+        scans = f"the log's {len(records)} scans to run on {fixed(lo)} to {fixed(hi)} s"
+    elif end is not None:
+        scans = f"the whole log's scans {fixed(lo)} to {fixed(max(end, hi))} s ({len(records)} of them read, --max-scans)"
+    else:
+        scans = f"the {len(records)} scans read (at most {cut}, --max-scans) {fixed(lo)} to {fixed(hi)} s"
     raise LmsbenchError(f"{where}: none of its {len(relations)} relations lies within the scans' time span: the relations "
-                        f"span {fixed(first)} to {fixed(last)} s, {scans} {fixed(lo)} to {fixed(hi)} s; the relations "
+                        f"span {fixed(first)} to {fixed(last)} s, {scans}; the relations "
                         "error would score nothing (the relations of another log, or stamps of another clock?)")
 
 

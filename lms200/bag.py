@@ -1703,6 +1703,20 @@ class BagReader:
         finally:
             reader.close()
 
+    def last_stamp(self) -> float | None:
+        """The latest header stamp (s) of the bag's scans on the topic read, read from the messages' bytes
+        where the bag's definitions put it where ROS does (:meth:`_scan_stamps`), without reading its
+        records; None where the bag cannot be read so or holds no scan."""
+        try:
+            reader = self._open()
+            try:
+                last = max(self._scan_stamps(reader, self._scan_connections(reader)), default=None)
+            finally:
+                reader.close()
+        except Exception:  # noqa: BLE001 - a damaged bag: rosbags' own types; the pass that reads it reports it
+            return None
+        return None if last is None else _ns_stamp(last)
+
     @staticmethod
     def _scan_stamps(reader, scans: list) -> Iterator[int]:  # noqa: ANN001
         """The header stamps (ns) of the scans, read from their bytes where the bag's definitions

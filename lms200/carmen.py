@@ -353,6 +353,30 @@ class CarmenReader:
             pass
         return counts
 
+    def last_stamp(self) -> float | None:
+        """The ipc_timestamp (s) of the log's last laser line of the kind read (``stats.laser`` after a
+        pass, else ``topic`` or the default kind) whose fields add up to its counts, found without
+        reading the log's records: a plain file is read from its end back to that line; a compressed
+        one is decompressed in one pass, each line only looked at for its message name (MIT CSAIL's
+        872 KB gzip: 0.014 s, where reading its records takes 0.28 s). None where there is no such line
+        (or the kind cannot be told); where the stream is damaged, the last such line before the damage."""
+        kind = self.stats.laser or self.topic
+        if kind is None:
+            try:
+                kind = self._survey()
+            except LogFormatError:
+                return None
+        if kind is None:
+            return None
+        with open(self.path, "rb") as f:
+            packed = compression(f.read(6)) is not None
+        lines = _compressed_lines_of(self.path, kind) if packed else _lines_from_end(self.path)
+        for line in lines:
+            stamp = laser_line_stamp(line, kind)
+            if stamp is not None:
+                return stamp
+        return None
+
     def _no_laser_reason(self, lines: int, quiet: int) -> str:
         """Why a pass that met no laser line (of any kind) is an error, by what the file held: a log
         that gives no scan is a failed recording or download, not a run of no scans (an empty file,
@@ -825,6 +849,73 @@ def _logger_at(words: list[str], fixed: int) -> int:
     if tail <= 0 or (tail == 1 and not _is_number(words[-1])):
         return len(words)
     return len(words) - 1
+
+
+def laser_line_stamp(line: bytes, kind: str) -> float | None:
+    """The ipc_timestamp (s) of a laser line of ``kind`` whose fields add up to its counts (as
+    :func:`_fields_fit` tells them, its numbers up to the stamp numbers), None for any other line or
+    a stamp no reader takes (:func:`stamp_problem`)."""
+    if not line.startswith(kind.encode("ascii")):
+        return None
+    words = line.decode("ascii", "replace").split()
+    if not words or words[0] != kind:
+        return None
+    try:
+        if kind in ("FLASER", "RLASER"):
+            n, m, numbers_from = _count(words[1], "beam count"), 0, 2 + _count(words[1], "beam count")
+        else:
+            n = _count(words[8], "beam count")
+            m = _count(words[9 + n], "remission count")
+            numbers_from = 10 + n + m
+        fixed_words = _field_count(kind, n, m) - 2  # the words up to the ipc_timestamp
+        if n <= 0 or not _tail_fits(words, fixed_words, numbers_from):
+            return None
+        stamp = float(words[fixed_words - 1])
+    except (ValueError, IndexError):
+        return None
+    return stamp if stamp_problem(stamp, "ipc_timestamp") is None else None
+
+
+LAST_LINES_BLOCK = 1 << 16  # bytes read at a time from a plain log's end (:func:`_lines_from_end`)
+
+
+def _lines_from_end(path: Path) -> Iterator[bytes]:
+    """A plain file's lines, its last first (a line longer than ``MAX_LINE_CHARS``, which the reader
+    refuses, is left out)."""
+    with open(path, "rb") as f:
+        pos = f.seek(0, os.SEEK_END)
+        rest, long = b"", False  # the start of the line that ends the block read last; it runs on past MAX_LINE_CHARS
+        while pos > 0:
+            step = min(LAST_LINES_BLOCK, pos)
+            pos -= step
+            f.seek(pos)
+            pieces = (f.read(step) + rest).split(b"\n")
+            for line in reversed(pieces[1:]):
+                if not long:
+                    yield line
+                long = False
+            rest = pieces[0]
+            if len(rest) > MAX_LINE_CHARS:
+                rest, long = b"", True
+        if not long:
+            yield rest
+
+
+def _compressed_lines_of(path: Path, kind: str, kept: int = 16) -> Iterator[bytes]:
+    """The last ``kept`` lines of a compressed log that start with ``kind``, its last first, from one
+    decompressing pass (damage ends the pass where it is)."""
+    from collections import deque
+
+    start = kind.encode("ascii")
+    last: deque[bytes] = deque(maxlen=kept)
+    try:
+        with open_bytes(path) as f:
+            for line in iter(lambda: f.readline(MAX_LINE_CHARS + 1), b""):
+                if line.startswith(start):
+                    last.append(line)
+    except READ_ERRORS:
+        pass
+    return reversed(last)
 
 
 def _fields_fit(kind: str, line: str) -> bool:

@@ -268,6 +268,11 @@ def test_relations_beside_none_of_the_scans_are_refused_before_the_run(sim_folde
     # one pair inside, or past the cut of --max-scans: read (the run's warning says what it scores)
     assert load_input(sim_folder, relations("part.relations", (1.0, 1.5), (100.0, 101.0))).relations.shape == (2, 5)
     assert load_input(sim_folder, relations("later.relations", (4.0, 4.5)), max_scans=5).relations.shape == (1, 5)
+    # past the cut and past the whole log's end (its last stamp, found from the log's tail): refused as without the
+    # cut (they passed, the whole SLAM run on the cut, exit 0, when they lay after it)
+    with pytest.raises(LmsbenchError, match=r"relations span 100\.000000 to 102\.000000 s, the whole log's scans "
+                                            r"0\.000000 to 5\.9[0-9]+ s \(5 of them read, --max-scans\)"):
+        load_input(sim_folder, other, max_scans=5)
     from lms200 import Record, Scan
 
     log = tmp_path / "late.clf"  # scans from 10 s on
@@ -275,6 +280,11 @@ def test_relations_beside_none_of_the_scans_are_refused_before_the_run(sim_folde
     with pytest.raises(LmsbenchError, match=r"relations span 1\.000000 to 2\.000000 s, the 5 scans read \(at most 5, "
                                             r"--max-scans\) 10\.000000 to 10\.400000 s"):  # before the scans: not the log's
         load_input(log, relations("before.relations", (1.0, 2.0)), max_scans=5)
+    packed = tmp_path / "late.clf.gz"  # the same log gzipped: its end from one decompressing pass
+    write_log(packed, [Record(Scan.lms200(np.full(361, 2.0 + 0.01 * k), stamp=10.0 + 0.1 * k)) for k in range(8)])
+    assert load_input(packed, relations("tail.relations", (10.5, 10.7)), max_scans=5).relations.shape == (1, 5)
+    with pytest.raises(LmsbenchError, match=r"the whole log's scans 10\.000000 to 10\.700000 s \(5 of them read"):
+        load_input(packed, relations("after.relations", (10.75, 11.0)), max_scans=5)
     # found beside the log, not given: a stale file is left out with a note (no option could leave it out)
     relations("late.relations", (1.0, 2.0))
     found = load_input(log)

@@ -15,16 +15,18 @@ from lms200 import read_tum, write_log
 
 @pytest.fixture(scope="module")
 def short_log(tmp_path_factory) -> Path:
-    """A 1 s simulated office log (odometry on every record) and relations that all start after it."""
+    """A 2 s simulated office log (odometry on every record) and relations that all lie after its first 10
+    scans (the runs below keep at most 8), within the log: the log's own, past the cut (relations after
+    the whole log are another log's, refused: test_slam_cli)."""
     from sim import simulate_records
     from sim.records import OdometryConfig
 
     out = tmp_path_factory.mktemp("short")
-    records = simulate_records("office", seed=1, duration=1.0, odometry=OdometryConfig(), rate_hz=10.0)
+    records = simulate_records("office", seed=1, duration=2.0, odometry=OdometryConfig(), rate_hz=10.0)
     write_log(out / "run.clf", records)
-    end = records[-1].scan.stamp
-    (out / "run.relations").write_text(f"{end + 5:.3f} {end + 6:.3f} 0.5 0 0 0 0 0.1\n"
-                                       f"{end + 7:.3f} {end + 9:.3f} 1.0 0 0 0 0 0.0\n")
+    t = [r.scan.stamp for r in records]
+    (out / "run.relations").write_text(f"{t[10]:.3f} {t[12]:.3f} 0.5 0 0 0 0 0.1\n"
+                                       f"{t[13]:.3f} {t[17]:.3f} 1.0 0 0 0 0 0.0\n")
     return out / "run.clf"
 
 

@@ -1,0 +1,45 @@
+"""A log's last stamp, found without reading its records (``reader.last_stamp()``), against the stamps
+its records carry: `slam LOG --relations OTHER --max-scans N` compares the relations with the whole
+log's time span, which a cut read does not reach."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from lms200 import Record, Scan, read_log, write_log
+
+
+def _records(n: int, t0: float = 10.0) -> list[Record]:
+    return [Record(Scan.lms200(np.full(361, 2.0 + 0.001 * k), stamp=t0 + 0.1 * k), odom=(0.01 * k, 0.0, 0.0))
+            for k in range(n)]
+
+
+@pytest.mark.parametrize("name", ["log.clf", "log.clf.gz", "log.clf.bz2", "log.bag"])
+def test_the_last_stamp_is_the_last_records(tmp_path, name):
+    """Plain (read from its end over several 64 KiB blocks: 60 scans of 361 beams), compressed (one
+    decompressing pass) and a bag (header stamps from the bytes): the last record's stamp."""
+    path = tmp_path / name
+    write_log(path, _records(60))
+    reader = read_log(path)
+    assert reader.last_stamp() == pytest.approx([r.scan.stamp for r in reader][-1], abs=1e-9) == pytest.approx(15.9)
+
+
+def test_a_cut_or_malformed_last_line_and_trailing_lines_are_passed_over(tmp_path):
+    """A log cut mid-line (a killed logger), then comments and other messages: the last laser line
+    that adds up gives the stamp; a log of no laser line gives None."""
+    path = tmp_path / "cut.clf"
+    write_log(path, _records(5))
+    text = path.read_text()
+    last = text.rstrip("\n").splitlines()[-1]
+    path.write_text(text + "ODOM 0 0 0 0 0 0 99.0 host 99.0\n# a comment\n" + last[: len(last) // 2])
+    assert read_log(path).last_stamp() == pytest.approx(10.4)
+    (tmp_path / "none.clf").write_text("ODOM 0 0 0 0 0 0 1.0 host 1.0\n")
+    assert read_log(tmp_path / "none.clf").last_stamp() is None
+
+
+def test_the_real_logs_last_stamps(shared_data):
+    """FLASER (MIT CSAIL, Intel) and ROBOTLASER1 (CSAIL) logs, gzipped: as their last records."""
+    for name in ("mit-csail.clf.gz", "csail-robotlaser1.log.gz"):
+        reader = read_log(shared_data / name)
+        assert reader.last_stamp() == [r.scan.stamp for r in reader][-1]
