@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from experiments.options import DURATION, MAX_DURATION_S, OneLineParser, number, plain_number
 from experiments.provenance import write_parquet
 
 MIT_LOG = Path(__file__).resolve().parents[2] / "shared" / "data" / "carmen" / "mit-csail.clf.gz"
@@ -118,19 +119,46 @@ def _md(df: pd.DataFrame) -> str:
 
 
 def _seeds(text: str) -> list[int]:
+    """An argparse type: a seed or a range LO-HI of seeds (whole numbers, LO <= HI)."""
     lo, _, hi = text.partition("-")
-    return list(range(int(lo), int(hi or lo) + 1))
+    try:
+        first, last = int(plain_number(lo, integer=True)), int(plain_number(hi or lo, integer=True))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a seed or a range LO-HI of seeds (0-20), got {text!r}") from None
+    if first > last:
+        raise argparse.ArgumentTypeError(f"must be a seed or a range LO-HI of seeds with LO <= HI, got {text!r}")
+    return list(range(first, last + 1))
+
+
+_seeds.__name__ = "seeds"  # argparse names the type in some messages
+
+
+def _long(text: str) -> float:
+    """An argparse type: the consistency run's duration (s), 0 for none, else as a simulated run's
+    (``options.DURATION``: `--long 1e-3` failed inside the simulator, a traceback)."""
+    value = number(0.0, MAX_DURATION_S, unit="s")(text)
+    if value != 0.0:
+        try:
+            value = DURATION(text)
+        except argparse.ArgumentTypeError as exc:
+            raise argparse.ArgumentTypeError(f"{exc} (or 0: no consistency run)") from None
+    return value
+
+
+_long.__name__ = "number"
 
 
 def main(argv: list[str] | None = None) -> int:
     # the docstring's first paragraph (its first line alone stopped mid-sentence: "..., a long")
-    ap = argparse.ArgumentParser(prog="python -m experiments.slameval", description=" ".join(__doc__.split("\n\n")[0].split()))
+    # a bad value is one line, exit 2 (options.OneLineParser); the durations read as options.number reads them:
+    # `--long 1e-400` read as 0, "no consistency run", and ran without it, exit 0 (lms200.finite.underflow_problem)
+    ap = OneLineParser(prog="python -m experiments.slameval", description=" ".join(__doc__.split("\n\n")[0].split()))
     ap.add_argument("--out", type=Path, required=True, help="folder for sim.parquet, mit.parquet, long.parquet, tables.md")
-    ap.add_argument("--seeds", default="0-20", help="simulated office runs, a seed or a range LO-HI (default 0-20)")
-    ap.add_argument("--duration", type=float, default=90.0, help="duration (s) of each simulated run (default 90)")
+    ap.add_argument("--seeds", type=_seeds, default="0-20", help="simulated office runs, a seed or a range LO-HI (default 0-20)")
+    ap.add_argument("--duration", type=DURATION, default=90.0, help="duration (s) of each simulated run (default 90)")
     ap.add_argument("--mit", type=Path, default=MIT_LOG,
                     help="MIT CSAIL log (default: shared/data/carmen/mit-csail.clf.gz beside the checkout; skipped where absent)")
-    ap.add_argument("--long", type=float, default=900.0, help="duration (s) of the consistency run (default 900; 0: none)")
+    ap.add_argument("--long", type=_long, default=900.0, help="duration (s) of the consistency run (default 900; 0: none)")
     args = ap.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     md = []
@@ -142,7 +170,7 @@ def main(argv: list[str] | None = None) -> int:
         lg = long_run(0, args.long, 37.5)
         write_parquet(lg, args.out / "long.parquet")
         md += [_md(lg), ""]
-    sim = sim_rows(_seeds(args.seeds), [37.5, 5.0], args.duration, ["default"])
+    sim = sim_rows(args.seeds, [37.5, 5.0], args.duration, ["default"])
     write_parquet(sim, args.out / "sim.parquet")
     wide = sim.pivot_table(index="seed", columns="rate_hz", values=["ate_rmse_m", "cpu_scans_per_s"])
     wide.columns = [f"{v} @ {r:g} Hz" for v, r in wide.columns]

@@ -174,6 +174,29 @@ def test_the_research_scripts_docs_name_answer_help_without_running(capsys: pyte
     assert "paper preset against the default." in text and "(default 0-20)" in text and "(default 90)" in text
 
 
+@pytest.mark.parametrize("given, message", [
+    (["--long", "1e-400"], "argument --long: must be a finite number >= 0 and <= 3600 s, got '1e-400': 1e-400 rounds "
+                           "to 0 in float64"),
+    (["--duration", "1e-400"], "argument --duration: must be a finite number >= 0.1 and <= 3600 s, got '1e-400': "
+                               "1e-400 rounds to 0"),
+    (["--long", "1e-3"], "argument --long: must be a finite number >= 0.1 and <= 3600 s, got '1e-3' (or 0: no "
+                         "consistency run)"),
+    (["--seeds", "5-2"], "argument --seeds: must be a seed or a range LO-HI of seeds with LO <= HI, got '5-2'"),
+])
+def test_the_slam_evaluations_options_are_checked_as_the_commands_are(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                                                      given: list[str], message: str) -> None:
+    """`python -m experiments.slameval --long 1e-400` read 0 ("no consistency run") and ran without it, exit 0;
+    `--duration 1e-400` and `--long 1e-3` failed inside the simulator (a traceback). One line, exit 2, nothing run."""
+    from experiments import slameval
+
+    with pytest.raises(SystemExit) as stop:
+        slameval.main(["--out", str(tmp_path / "o"), *given])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"python -m experiments.slameval: error: {message}") and err.count("\n") == 1, err
+    assert not (tmp_path / "o").exists()
+
+
 def test_a_missing_input_names_the_file_it_was_likely_meant_to_be(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
                                                                    capsys: pytest.CaptureFixture[str]) -> None:
     """`lmsbench info ../shared/data/carmen/mit-csail.clf` (the file is mit-csail.clf.gz) said
