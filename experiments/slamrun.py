@@ -419,13 +419,16 @@ class SlamRun:
 
 
 def _quiet_bounds(records: Iterable[Record], config: SlamConfig) -> SlamResult:
-    """``run_slam`` without its SlamBoundWarnings (:func:`say_bounds` says them naming the run)."""
+    """``run_slam`` without its SlamBoundWarnings (:func:`say_bounds` says them naming the run), nor its
+    RangeUnitsWarning: the records are a log reader's (:func:`load_input`), whose pass said it, naming the log."""
     import warnings
 
+    from lms200.units import RangeUnitsWarning
     from slam.run import SlamBoundWarning
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", SlamBoundWarning)
+        warnings.simplefilter("ignore", RangeUnitsWarning)
         return run_slam(records, config)
 
 

@@ -1542,6 +1542,9 @@ class BagReader:
             ``topic``, a missing topic, or a message that cannot be read (naming topic and index).
     """
 
+    #: each pass looks at its first scans for ranges in millimetres (``lms200.units.reader_watches``)
+    WATCHES_UNITS = True
+
     def __init__(self, path: str | Path, topic: str | None = None, skip_bad_lines: bool = False,
                  range_max: float | None = None) -> None:
         self.path = Path(path)

@@ -311,6 +311,9 @@ class CarmenReader:
         InputError: a ``topic`` that is no laser kind (the message lists the log's laser lines).
     """
 
+    #: each pass looks at its first scans for ranges in millimetres (``lms200.units.reader_watches``)
+    WATCHES_UNITS = True
+
     def __init__(self, path: str | Path, skip_bad_lines: bool = False, topic: str | None = None,
                  geometry: LaserGeometry | None = None) -> None:
         self.path = Path(path)

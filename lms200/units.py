@@ -4,9 +4,11 @@ A ``Scan``'s ranges are metres, and a reading beyond ``range_max`` is no return 
 written in millimetres (a user's array, a log or bag written so) lie about 1000x too far: every
 one beyond ``range_max``, so every beam reads as no return, no extractor finds a line, and nothing
 said why. :func:`units_problem` tells such scans from open space by what their readings would be
-in metres, divided by 1000; the log readers (``lms200.carmen``, ``lms200.bag``) and
-``experiments.compare.compare`` (a user's records, which no reader saw) warn with it, once per pass
-or run, never per scan of an extraction (``features.extract`` and ``slam.run_slam`` do not look).
+in metres, divided by 1000; the log readers (``lms200.carmen``, ``lms200.bag``),
+``experiments.compare.compare`` and ``slam.run_slam`` (a user's records, which no reader saw; a
+reader given to them warns itself) warn with it, once per pass or run, from the scans they read
+anyway (none read ahead), never per scan of an extraction: ``features.extract`` does not look (a
+single call's hot path).
 """
 
 from __future__ import annotations
@@ -128,6 +130,12 @@ def warn_units(scans: Iterable[Scan], where: str) -> None:
 def _warn(problem: str | None, where: str) -> None:
     if problem:  # issued here, whoever reads: Python's default filter says one text once, not once a pass
         warnings.warn(f"{where}: {problem}", RangeUnitsWarning, stacklevel=1)
+
+
+def reader_watches(records: object) -> bool:
+    """Whether ``records`` is a source whose own passes look at their first scans (a log reader: its
+    class's ``WATCHES_UNITS``), so that a consumer does not say their units a second time."""
+    return bool(getattr(type(records), "WATCHES_UNITS", False))
 
 
 def units_watched(records: Iterable[Record], where: str) -> Iterator[Record]:

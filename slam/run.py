@@ -14,6 +14,7 @@ from lms200.errors import LmsbenchWarning
 from lms200.finite import shown
 from lms200.logs import MAX_COORD_M, checked_records
 from lms200.records import Record, pose_problem
+from lms200.units import reader_watches, units_watched
 
 from .config import MIN_MATCH_POINTS, SlamConfig
 from .filter import SlamFilter, SlamInputError, checked_step
@@ -408,6 +409,10 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig(), max_s
     list, a tuple or another sized collection is taken whole, and refused before any work when it
     holds more than ``MAX_SLAM_SCANS``.
 
+    The first ``lms200.units.UNITS_SCANS`` (50) scans are looked at for ranges in millimetres as
+    they come (none read ahead; a log reader given as ``records`` looks itself): one
+    ``lms200.units.RangeUnitsWarning`` where they look so (every beam a no return).
+
     Returns:
         SlamResult with one pose per record, stamped with the record's ``scan.stamp``.
 
@@ -425,10 +430,16 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig(), max_s
         iter(records)
     except TypeError:
         raise SlamInputError(f"records: must be an iterable of lms200.Record, got {type(records).__name__}") from None
+    watched = reader_watches(records)  # a log reader's pass looks at its first scans' units itself
     # an int past sys.maxsize is no count islice takes (a raw ValueError); no source holds that many
     capped: Iterable[Any] = (Capped(records, "records") if max_scans is None
                              else itertools.islice(records, min(int(max_scans), sys.maxsize)))
     records = in_scale(checked_records(iter(capped), SlamInputError))
+    if not watched:
+        # the first UNITS_SCANS scans looked at as they come for ranges in millimetres (lms200.units), none read
+        # ahead: a hand-built Scan in millimetres ran with every beam a no return, and nothing said why (a log
+        # reader's pass says it itself)
+        records = units_watched(records, "records")
     range_maxes: set[float] = set()
 
     def seen(records: Iterable[Record]) -> Iterator[Record]:

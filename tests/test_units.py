@@ -71,6 +71,36 @@ def test_compare_says_it_of_scans_of_the_users_own() -> None:
     assert len(pulled) <= 3
 
 
+def test_run_slam_says_it_of_scans_of_the_users_own_and_a_readers_once(tmp_path: Path) -> None:
+    """A hand-built Scan in millimetres given straight to slam.run_slam ran with every beam a no return,
+    without a word; now its first scans are looked at as they come (a live iterator read no further than
+    the run: max_scans 2 pulls 2), and a log reader given to it says it once, itself."""
+    from slam import SlamConfig, run_slam
+
+    moving = [s.replace(stamp=0.1 * k) for k, s in enumerate(_room_mm(4))]
+    with pytest.warns(RangeUnitsWarning, match=r"^records: none of the first 4 scans has a valid beam") as said:
+        run_slam([Record(s) for s in moving], SlamConfig())
+    assert len([w for w in said if issubclass(w.category, RangeUnitsWarning)]) == 1
+    pulled = []
+
+    def stream():
+        for rec in [Record(s) for s in moving] * 30:
+            pulled.append(rec)
+            yield rec
+
+    with pytest.warns(RangeUnitsWarning, match=r"^records: none of the first 2 scans"):
+        run_slam(stream(), SlamConfig(), max_scans=2)
+    assert len(pulled) == 2
+    with warnings.catch_warnings():  # metres: nothing said
+        warnings.simplefilter("error", RangeUnitsWarning)
+        run_slam([Record(s.replace(ranges=s.ranges / 1000.0)) for s in moving], SlamConfig())
+    log = tmp_path / "mm.clf"
+    write_log(log, [Record(s) for s in moving])
+    with pytest.warns(RangeUnitsWarning) as said:
+        run_slam(read_log(log), SlamConfig())
+    assert [str(w.message).split(":")[0] for w in said if issubclass(w.category, RangeUnitsWarning)] == [str(log)]
+
+
 @pytest.mark.shared_data
 def test_no_real_log_is_taken_for_millimetres(shared_data: Path) -> None:
     for log in sorted(shared_data.glob("*.gz")):
