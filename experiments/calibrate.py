@@ -53,7 +53,6 @@ from lms200.finite import fixed
 from lms200.calibration import LogCalibration, calibrate_scans
 from lms200.laser_geometry import MIN_RANGE_MAX_M
 from lms200.timing import LMS200_MAX_FOV_DEG
-from lms200.units import UNITS_SCANS, UnitsTally
 
 from experiments.logargs import report_skipped
 from experiments.options import warnings_after_checks
@@ -258,8 +257,6 @@ def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_
                 raise
             yield rec
 
-    units = UnitsTally()  # ranges in millimetres: what the reader warns of, told by the error it leads to
-
     def scans():
         first = None
         for k, rec in enumerate(records()):
@@ -268,8 +265,6 @@ def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_
             if k % stride == 0:
                 first = first or (k, rec.scan)
                 same_geometry(rec.scan, first[1], f"scan {k}", f"scan {first[0]}")
-                if units.scans < UNITS_SCANS:
-                    units.add(rec.scan)
                 yield rec.scan
 
     # the reader's warnings (ranges in millimetres, a damaged line skipped) are said once the log is measured:
@@ -281,7 +276,9 @@ def calibrate_log(path: str | Path, world: str = "office", stride: int = 1, max_
             cal = calibrate_scans(scans())
             if report_skips:
                 report_skipped(reader, stream=skips)
-            problem = units.problem()
+            # ranges in millimetres: what the reader warns of (its tally of the pass's first scans), told by the
+            # error it leads to (calibrate tallied the same scans a second time beside the reader)
+            problem = reader.units.problem()
             if problem is not None and not np.isfinite(cal.noise.sigma_m):  # the units are why (base_sensor's error)
                 raise LmsbenchError(f"too few straight runs of beams at 1-4 m in {cal.n_scans} scan(s) to estimate the "
                                     f"range noise ({cal.noise.n_used} beam triples): {problem}")

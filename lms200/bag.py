@@ -1554,6 +1554,9 @@ class BagReader:
         self.range_max = range_max
         self.skip_bad_lines = skip_bad_lines
         self.stats = BagReadStats()
+        from .units import UnitsTally
+
+        self.units = UnitsTally()  # the units seen by the last pass (:meth:`__iter__`)
         self._warned = False  # the warning of a bag never closed: once
 
     def _open(self):  # noqa: ANN202 - rosbags' AnyReader
@@ -1643,10 +1646,12 @@ class BagReader:
             self.stats.stopped = f"{where}: {reason}"
 
     def __iter__(self) -> Iterator[Record]:
-        """The bag's records, one pass; its first scans checked for ranges in millimetres (``lms200.units``)."""
-        from .units import units_watched
+        """The bag's records, one pass; its first scans checked for ranges in millimetres (``lms200.units``).; what they
+        showed is ``units`` (an ``lms200.units.UnitsTally`` of the pass's first UNITS_SCANS scans)."""
+        from .units import UnitsTally, units_watched
 
-        return units_watched(self._pass(), str(self.path))
+        self.units = UnitsTally()  # this pass's (the last pass's once it ends)
+        return units_watched(self._pass(), str(self.path), self.units)
 
     def _pass(self) -> Iterator[Record]:
         self.stats = stats = BagReadStats(laser=self.topic)

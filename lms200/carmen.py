@@ -334,6 +334,9 @@ class CarmenReader:
         self.topic = topic
         self.geometry = geometry or LaserGeometry()
         self.stats = ReadStats()
+        from .units import UnitsTally
+
+        self.units = UnitsTally()  # the units seen by the last pass (:meth:`__iter__`)
         self._held: list[_Held] = []  # the pass's lines held until their tail is told (:meth:`_read`)
 
     def _laser_counts(self) -> dict[str, int]:
@@ -519,10 +522,12 @@ class CarmenReader:
         return raw
 
     def __iter__(self) -> Iterator[Record]:
-        """The log's records, one pass; its first scans checked for ranges in millimetres (``lms200.units``)."""
-        from .units import units_watched
+        """The log's records, one pass; its first scans checked for ranges in millimetres (``lms200.units``).; what they
+        showed is ``units`` (an ``lms200.units.UnitsTally`` of the pass's first UNITS_SCANS scans)."""
+        from .units import UnitsTally, units_watched
 
-        return units_watched(self._pass(), str(self.path))
+        self.units = UnitsTally()  # this pass's (the last pass's once it ends)
+        return units_watched(self._pass(), str(self.path), self.units)
 
     def _pass(self) -> Iterator[Record]:
         flushes: list[Callable[[], Iterator[Record]]] = []  # this pass's flush() of what holds records back

@@ -138,11 +138,13 @@ def reader_watches(records: object) -> bool:
     return bool(getattr(type(records), "WATCHES_UNITS", False))
 
 
-def units_watched(records: Iterable[Record], where: str) -> Iterator[Record]:
+def units_watched(records: Iterable[Record], where: str, tally: UnitsTally | None = None) -> Iterator[Record]:
     """``records`` as they come, their first UNITS_SCANS scans (all of a pass with fewer, once it
     ends) looked at by :func:`units_problem`, one by one (none held), and said by :func:`warn_units`:
-    a reader's pass warns once, and a pass stopped before then does not."""
-    tally = UnitsTally()
+    a reader's pass warns once, and a pass stopped before then does not. ``tally``: the
+    :class:`UnitsTally` to add them to (a reader's ``units``, which its caller may ask after the
+    pass: ``experiments.calibrate`` tallied the same scans a second time), else a new one."""
+    tally = UnitsTally() if tally is None else tally
     for rec in records:
         if tally.scans < UNITS_SCANS:
             tally.add(rec.scan)

@@ -51,6 +51,21 @@ def test_a_log_in_millimetres_is_said_once_a_pass_by_its_reader(tmp_path: Path) 
         assert len(list(itertools.islice(read_log(log), 10))) == 10
 
 
+def test_a_readers_tally_of_its_pass_is_exposed(tmp_path: Path) -> None:
+    """reader.units: the UnitsTally of its last pass's first 50 scans (calibrate tallied them a second
+    time beside the reader, which kept its own to itself), as units_problem tells them."""
+    log = tmp_path / "mm.clf"
+    write_log(log, [Record(s) for s in _room_mm(60)])
+    reader = read_log(log)
+    with pytest.warns(RangeUnitsWarning):
+        scans = [rec.scan for rec in reader]
+    assert reader.units.scans == 50 and reader.units.problem() == units_problem(scans[:50])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RangeUnitsWarning)
+        assert len(list(itertools.islice(reader, 3))) == 3
+    assert reader.units.scans == 3 and reader.units.problem() == units_problem(scans[:3])  # a new pass, a new tally
+
+
 def test_compare_says_it_of_scans_of_the_users_own() -> None:
     from experiments.compare import Source, compare
 
