@@ -1428,7 +1428,14 @@ def check_study_tables(folder: str | os.PathLike) -> Path:
 
 
 def check_sweep_results(folder: str | os.PathLike) -> Path:
-    """A sweep folder with results.parquet holding at least one successful cell."""
+    """A sweep folder with results.parquet holding at least one successful cell (:func:`read_sweep_results`)."""
+    return read_sweep_results(folder)[0]
+
+
+def read_sweep_results(folder: str | os.PathLike) -> tuple[Path, Any]:
+    """A sweep folder with results.parquet holding at least one successful cell, and that table (a
+    pandas DataFrame) as read for the checks: ``figures --sweep`` draws from it (it read the table again for
+    its plots' names, its record and its drawing: four times a sweep)."""
     from experiments.provenance import read_parquet
 
     p = Path(folder)
@@ -1493,7 +1500,7 @@ def check_sweep_results(folder: str | os.PathLike) -> Path:
         raise InputError(f"--sweep {p}: its results.parquet's row {strange}: the table and the sweep.yaml "
                          f"({spec_path}) are of different sweeps, or the table was edited; run the sweep again into a "
                          "new folder")
-    return p
+    return p, table
 
 
 def _foreign_rows(table: Any, cells: list[dict], params: list[str]) -> str | None:

@@ -1025,7 +1025,7 @@ def test_sweeps_of_other_names_are_drawn_side_by_side(tmp_path):
     a = _sweep_folder(tmp_path / "a" / "sweep", 0.5, "name: one\nkind: extract\ngrid:\n  x: [1, 2]\n")
     b = _sweep_folder(tmp_path / "b" / "sweep", 0.9, "name: two\nkind: extract\ngrid:\n  x: [1, 2]\n")
     assert sweep_stems(a) == ["sweep_one_f1"] and sweep_stems(b) == ["sweep_two_f1"]
-    _check_sweeps_apart([a, b])
+    _check_sweeps_apart([(a, None), (b, None)])  # each folder with its table (None: read for the check)
 
 
 def test_out_may_not_write_over_what_the_run_reads(files, tmp_path, capsys):

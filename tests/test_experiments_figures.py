@@ -391,3 +391,31 @@ def test_a_dot_in_a_figures_name_is_no_suffix(tmp_path):
         save_figure(fig, tmp_path / f"sweep_k.v_{metric}", data=pd.DataFrame({"a": [1]}))
     assert sorted(p.name for p in tmp_path.iterdir()) == [
         f"sweep_k.v_acc.{n}.{end}" for n in (5, 6) for end in ("csv", "pdf", "png")]
+
+
+def test_figures_reads_each_sweep_table_once(tmp_path, monkeypatch, capsys):
+    """`figures --sweep DIR` read DIR/results.parquet four times (its checks, the plots' names, figures.yaml's
+    list of them, the drawing); now its checks' read is passed on (options.read_sweep_results)."""
+    import experiments.figures.study as study
+    import experiments.provenance as provenance
+    from experiments.cli import main
+    from experiments.figures.study import StudyConfig, save_tables
+
+    sweep = tmp_path / "sw"
+    sweep.mkdir()
+    pd.DataFrame({"x": [1, 2], "status": ["ok", "ok"], "error": ["", ""], "cell": ["a", "b"], "seed": [0, 0],
+                  "f1": [0.5, 0.6]}).to_parquet(sweep / "results.parquet")
+    (sweep / "sweep.yaml").write_text("name: one\nkind: extract\ngrid:\n  x: [1, 2]\n")
+    save_tables({"summary": pd.DataFrame({"method": ["a"]})}, StudyConfig(), [], tmp_path / "tables")
+    reads = []
+    real = provenance.read_parquet
+
+    def counted(path, **kwargs):
+        reads.append(str(path))
+        return real(path, **kwargs)
+
+    monkeypatch.setattr(provenance, "read_parquet", counted)
+    monkeypatch.setattr(study, "read_parquet", counted)
+    assert main(["figures", "--tables", str(tmp_path / "tables"), "--sweep", str(sweep), "--out", str(tmp_path / "o")]) == 0
+    assert "sweep_one_f1" in capsys.readouterr().out and (tmp_path / "o" / "sweep_one_f1.png").is_file()
+    assert [r for r in reads if r.endswith("results.parquet")] == [str(sweep / "results.parquet")]

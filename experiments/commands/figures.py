@@ -11,7 +11,7 @@ from lms200.yamlio import dump as dump_yaml
 
 from experiments.logargs import add_log_options, given_log_flags, plain_log_options, read_log_options
 from experiments.options import (WORLDS, DEMO_OWNER, DURATION, FIGURE_ENDS, FIGURE_PART_FILES, FIGURES_OUTPUTS, FIGURES_OWNER, SEED, STUDY_TABLES, InputError, OutTree, check_log, real_path,
-                                 check_methods, check_out, check_study_tables, check_sweep_results, path_arg, scan_rate, world_name,
+                                 check_methods, check_out, check_study_tables, read_sweep_results, path_arg, scan_rate, world_name,
                                  text, check_link, recorded_names)
 
 
@@ -55,9 +55,10 @@ def run(args: argparse.Namespace) -> int:
     # alone a user's fig3_scan.png or accuracy_speed.csv in --out was written over; --tables: no table is
     replaces = FIGURES_OUTPUTS if args.tables is None else OutTree(FIGURES_OUTPUTS.files)
     check_out(args.out, writes=writes, owner=FIGURES_OWNER, replaces=replaces, default="results/figures")
-    for folder in args.sweep:
-        check_sweep_results(folder)
-    _check_sweeps_apart(args.sweep)
+    # each sweep's table read once, by its checks, and drawn from (it was read four times: the checks, the plots'
+    # names, the record and the drawing)
+    sweeps = [read_sweep_results(folder) for folder in args.sweep]
+    _check_sweeps_apart(sweeps)
     study = (("--duration", args.duration), ("--rate-hz", args.rate_hz), ("--seed", args.seed), ("--world", args.world),
              ("--methods", args.methods), ("--intel", args.intel), ("--no-slam", args.no_slam or None))
     ignored = [flag for flag, value in study if value is not None]
@@ -97,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
             *recorded_names(args.out / "figures.yaml", "sweep_plots")))
     elif not run_folder:  # a demo's figures/: the demo's own files stay, an earlier figures run's sweep plots go (they
         _remove_earlier_sweep_plots(args.out)  # stayed, and its figures.yaml, the one list of them, was written over)
-    write_record(args.out / "figures.yaml", _record(args))  # first, whole: a run stopped after it is told as ours
+    write_record(args.out / "figures.yaml", _record(args, sweeps))  # first, whole: a run stopped after it is told as ours
     if not args.tables:
         save_tables(tables, cfg, notes, args.out / "tables")
     from experiments.progress import heartbeat_on_terminal
@@ -116,8 +117,8 @@ def run(args: argparse.Namespace) -> int:
             raise LmsbenchError(f"--tables {args.tables}: the tables do not hold what the figures read "
                                 f"({type(exc).__name__}: {' '.join(str(exc).split())[:160]}); redraw from a "
                                 "complete tables/ folder of `lmsbench figures` or `lmsbench demo`") from None
-        for folder in args.sweep:
-            written.update(draw_sweep(folder, args.out, log=say))
+        for folder, table in sweeps:
+            written.update(draw_sweep(folder, args.out, log=say, table=table))
     args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     if run_folder:
         link_latest(args.out)
@@ -193,23 +194,24 @@ def _demos_figures(out: Path) -> bool:
     return real.name == "figures" and DEMO_OWNER.wrote_in(real.parent)
 
 
-def _check_sweeps_apart(folders: list[Path]) -> None:
+def _check_sweeps_apart(sweeps: list[tuple[Path, Any]]) -> None:
     """Refuse, before any work, two ``--sweep`` folders whose plots would have one name: a sweep's
     plots are ``sweep_<name>_<metric>.*`` by the ``name:`` of its sweep.yaml, so one sweep file run
     into two folders (``sweep s.yaml --out a``, ``--out b``) drew b's plots over a's, exit 0
     ("sweep_k_vs_noise_f1 ... wrote 31 files"); the same folder twice is refused as such, as
-    ``compare`` refuses a source given twice (and, like it, two logs of one figure name)."""
+    ``compare`` refuses a source given twice (and, like it, two logs of one figure name). ``sweeps``: each
+    folder with its table (``options.read_sweep_results``)."""
     from experiments.figures.make import sweep_stems
 
     seen: dict[str, Path] = {}  # a plot's name -> the --sweep folder that draws it
     folders_seen: dict[Path, Path] = {}  # a folder's real path -> the --sweep word that gave it
-    for folder in folders:
+    for folder, table in sweeps:
         first = folders_seen.setdefault(real_path(folder), folder)
         if first is not folder:
             raise InputError(f"--sweep {folder} is given twice ({first} and {folder}): each sweep folder once")
-        stems = sweep_stems(folder)
+        stems = sweep_stems(folder, table)
         if not stems:  # nothing of it was drawn, and the run said nothing of it
-            raise InputError(f"--sweep {folder}: {_nothing_to_plot(folder)}")
+            raise InputError(f"--sweep {folder}: {_nothing_to_plot(folder, table)}")
         for stem in stems:
             other = seen.setdefault(stem, folder)
             if other is not folder:
@@ -218,12 +220,12 @@ def _check_sweeps_apart(folders: list[Path]) -> None:
                                  "(another --out), or give one of them another name: in its sweep.yaml")
 
 
-def _nothing_to_plot(folder: Path) -> str:
+def _nothing_to_plot(folder: Path, table: Any) -> str:  # noqa: ANN401 - a pandas DataFrame
     """Why a sweep folder gives no plot: no metric with a value (its cells failed), or no grid
     parameter that varies and no sampled one (nothing to plot against)."""
-    from experiments.figures.make import _sweep_plan
+    from experiments.figures.make import sweep_plan
 
-    table, _, varied, sampled, metrics = _sweep_plan(folder)
+    table, _, varied, sampled, metrics = sweep_plan(folder, table)
     if not metrics:
         failed = int((table["status"] != "ok").sum()) if "status" in table else 0
         # "the others gave nan for every metric" was said of a kind's text, inf or boolean metrics too
@@ -234,7 +236,7 @@ def _nothing_to_plot(folder: Path) -> str:
             "against (its results.csv holds them)")
 
 
-def _record(args: argparse.Namespace) -> str:
+def _record(args: argparse.Namespace, sweeps: list[tuple[Path, Any]]) -> str:
     """figures.yaml: what drew the figures of its folder (options.FIGURES_OWNER tells the folder by
     it): a figure and its CSV say nothing of lmsbench, and ``--tables T --out DIR`` writes no table."""
 
@@ -243,7 +245,7 @@ def _record(args: argparse.Namespace) -> str:
 
     # sweep_plots: the files of the --sweep plots, named by a pattern (sweep_*), listed before they are drawn: the
     # next figures run into the folder removes exactly these (options.recorded_names), not a user's sweep_notes.csv
-    plots = [f"{stem}{end}" for folder in args.sweep for stem in sweep_stems(folder) for end in FIGURE_ENDS]
+    plots = [f"{stem}{end}" for folder, table in sweeps for stem in sweep_stems(folder, table) for end in FIGURE_ENDS]
     record = {"command": "lmsbench figures", "tables": str(args.tables) if args.tables else "tables (computed by this run)",
               "sweeps": [str(folder) for folder in args.sweep], "sweep_plots": plots, "versions": versions()}
     return ("# what drew the figures in this folder; lmsbench figures --out replaces its files only beside this record\n"

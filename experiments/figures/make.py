@@ -288,13 +288,15 @@ def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10
     return written
 
 
-def draw_sweep(folder: Path, out: Path, log: Callable[[str], None] | None = None) -> dict[str, list[Path]]:
+def draw_sweep(folder: Path, out: Path, log: Callable[[str], None] | None = None,
+               table: pd.DataFrame | None = None) -> dict[str, list[Path]]:
     """Plots of one sweep folder: each metric against the first grid parameter, a line per value
     of the second, a panel per value of the third (or combination of the rest); mean +/- std over
     seeds and random draws. A linked grid key "a,b" counts as its first name. The plots are
     ``out/sweep_<name>_<metric>.*`` (``sweep_stems``), name being the sweep.yaml's ``name:``.
-    ``log`` is told of each plot as it starts, as by :func:`draw_figures`."""
-    table, name, varied, sampled, metrics = _sweep_plan(folder)
+    ``log`` is told of each plot as it starts, as by :func:`draw_figures`. ``table``: the folder's
+    results.parquet as read already (``options.read_sweep_results``), else read here."""
+    table, name, varied, sampled, metrics = sweep_plan(folder, table)
 
     def starting(stem: str, number: int) -> None:
         if log is not None:
@@ -331,21 +333,22 @@ def draw_sweep(folder: Path, out: Path, log: Callable[[str], None] | None = None
     return written
 
 
-def sweep_stems(folder: Path) -> list[str]:
+def sweep_stems(folder: Path, table: pd.DataFrame | None = None) -> list[str]:
     """The names (without .png / .pdf / .csv) of the plots ``draw_sweep`` draws of ``folder``,
     drawing nothing: ``figures`` checks before any work that no two ``--sweep`` folders share one
     (two sweeps of one name, e.g. one sweep file run into two folders, wrote the second's plots over
-    the first's, exit 0)."""
-    _, name, varied, sampled, metrics = _sweep_plan(folder)
+    the first's, exit 0). ``table``: as :func:`draw_sweep`'s."""
+    _, name, varied, sampled, metrics = sweep_plan(folder, table)
     return [f"sweep_{name}_{m}" for m in metrics] if varied or sampled else []
 
 
-def _sweep_plan(folder: Path) -> tuple[pd.DataFrame, str, list[str], list[str], list[str]]:
-    """What ``draw_sweep`` plots of ``folder``: its table, name, varied grid parameters, sampled
-    parameters and metrics."""
-    from experiments.figures.study import read_table
+def sweep_plan(folder: Path, table: pd.DataFrame | None = None) -> tuple[pd.DataFrame, str, list[str], list[str], list[str]]:
+    """What ``draw_sweep`` plots of ``folder``: its table (``table``, its results.parquet read already,
+    else read here), name, varied grid parameters, sampled parameters and metrics."""
+    from experiments.figures.study import check_table, read_table
 
-    table = read_table(folder / "results.parquet")
+    path = folder / "results.parquet"
+    table = read_table(path) if table is None else check_table(table, path)
     spec = load_yaml((folder / "sweep.yaml").read_text(), words=True)  # the sweep's record, an earlier version's too
     name = spec.get("name", folder.name)
     if "name" in spec and not _file_name(name):  # it names the plots' files

@@ -215,6 +215,15 @@ def read_table(path: Path) -> pd.DataFrame:
         table = read_parquet(path)
     except (OSError, ValueError) as exc:
         raise LmsbenchError(f"{path}: not a readable parquet table ({' '.join(str(exc).split())[:200]})") from None
+    return check_table(table, path)
+
+
+def check_table(table: pd.DataFrame, path: Path) -> pd.DataFrame:
+    """``table``, read from ``path``, when the figures can draw it (plain column names, magnitudes within
+    MAX_TABLE_VALUE), else an LmsbenchError naming ``path``: :func:`read_table`'s checks, for a table
+    read already (a sweep's, by ``options.read_sweep_results``)."""
+    from lms200 import LmsbenchError
+
     odd = [c for c in table.columns if not isinstance(c, str)]
     if odd:  # levels of columns (a MultiIndex) were "internal error: AttributeError: 'DataFrame' object has no attribute 'dtype'"
         raise LmsbenchError(f"{path}: its column {odd[0]!r} is no plain name (a table of named columns, one level, "
