@@ -15,23 +15,10 @@ import pandas as pd
 from experiments.figures.make import article, draw_figures, draw_sweep
 from experiments.figures.study import STUDY_TABLE_NAMES, StudyConfig, run_study, save_tables
 from experiments.figures.tables import panels_log_name
-from experiments.options import DEMO_OUTPUTS, DEMO_OWNER, FIGURE_PART_FILES, recorded_names
+from experiments.options import DEMO_OUTPUTS, DEMO_OWNER, DEMO_SWEEP, FIGURE_PART_FILES, demo_sweep_files, recorded_names
 from experiments.report import Section, figure, markdown_table, write_report
 from lms200.errors import LmsbenchWarning
 from lms200.finite import printable
-
-#: The demo's sweep: window size k of the paper's extractor against range noise (a few seconds).
-DEMO_SWEEP = {
-    "name": "demo_k_vs_noise",
-    "kind": "extract",
-    "description": "sensor-coordinate extractor: window k against range noise (demo size)",
-    "fixed": {"method": "sensor", "world": "office", "duration": 3.0, "rate_hz": 4.0},
-    # the extractor is told the sensor's range noise (sigma_r), as for a sensor of known noise
-    "grid": {"sensor.noise_sigma,extractor.sigma_r": [[0.002, 0.002], [0.01, 0.01], [0.03, 0.03]],
-             "extractor.k": [3, 5, 10]},
-    "seeds": [0],
-}
-
 
 def run_demo(out: Path, cfg: StudyConfig, sweep_executor: str | None = "local",
              log: Callable[[str], None] = print) -> Path:
@@ -55,7 +42,7 @@ def _run_demo(out: Path, cfg: StudyConfig, sweep_executor: str | None, beat) -> 
     # log; its Fig. 9 / 10 tables; a figures run's figures.yaml): they stayed beside its report as if they were its
     DEMO_OWNER.remove_earlier(out, DEMO_OUTPUTS, keep=("tables/study.yaml",), also=(  # study.yaml: written first, next
         *(f"figures/{name}" for name in FIGURE_PART_FILES), *(f"tables/{name}.parquet" for name in STUDY_TABLE_NAMES),
-        *_sweep_files(out),
+        *demo_sweep_files(out),
         # a `figures --sweep S --out DEMO/figures` run's plots, as its figures.yaml (removed here) lists them
         *(f"figures/{name}" for name in recorded_names(out / "figures" / "figures.yaml", "sweep_plots"))))
     save_tables(tables, cfg, notes, out / "tables")
@@ -83,28 +70,6 @@ def _run_demo(out: Path, cfg: StudyConfig, sweep_executor: str | None, beat) -> 
     md, html = write_report(out, "lmsbench demo: fast feature extraction in sensor coordinates", sections)
     log(f"== wrote {md} and {html} ({elapsed:.0f} s)")
     return md
-
-
-def _sweep_files(out: Path) -> list[str]:
-    """The files of the demo's sweep that an earlier demo into ``out`` wrote by names a pattern stands for
-    (``sub/name``), named exactly: its cells, ``cells/KEY.parquet`` for the key of each cell of DEMO_SWEEP
-    (``sweep.cell_key``; the sweep reads no file), and its plots, ``figures/sweep_demo_k_vs_noise_METRIC.*``
-    for the metrics its table holds (``figures.make.sweep_stems``, as the demo drew them from it). The
-    patterns ``figures/sweep_demo_k_vs_noise_*`` and ``cells/*.parquet`` removed a user's files of such
-    names too, and the sweep's folder was removed whole before it ran."""
-    from experiments.figures.make import sweep_stems
-    from experiments.options import FIGURE_ENDS
-    from experiments.sweep import SweepSpec, cell_key
-    from lms200 import LmsbenchError
-
-    spec = SweepSpec.from_dict(DEMO_SWEEP)
-    folder = f"sweeps/{spec.name}"
-    names = [f"{folder}/cells/{cell_key(spec.kind, params)}.parquet" for params in spec.cells()]
-    try:  # a table the demo's sweep wrote: its plots are those of its metrics; none (or damaged): none drawn
-        stems = sweep_stems(out / folder) if (out / folder / "results.parquet").is_file() else []
-    except (LmsbenchError, OSError, ValueError):
-        stems = []
-    return names + [f"figures/{stem}{end}" for stem in stems for end in FIGURE_ENDS]
 
 
 #: The real log of the demo's sim-to-real section (skipped with a note where absent).

@@ -808,10 +808,43 @@ FIGURE_PART_FILES = (tuple(f"fig9_{source}_{part}.csv" for source in ("office", 
 #: A sweep folder (experiments.sweep.store).
 SWEEP_OUTPUTS = OutTree(("sweep.yaml", "versions.yaml", "results.parquet", "results.csv"),
                         {"cells": OutTree(("*.parquet",))})
+#: The demo's sweep (experiments.demo): window size k of the paper's extractor against range noise (a few seconds).
+DEMO_SWEEP: dict[str, Any] = {
+    "name": "demo_k_vs_noise",
+    "kind": "extract",
+    "description": "sensor-coordinate extractor: window k against range noise (demo size)",
+    "fixed": {"method": "sensor", "world": "office", "duration": 3.0, "rate_hz": 4.0},
+    # the extractor is told the sensor's range noise (sigma_r), as for a sensor of known noise
+    "grid": {"sensor.noise_sigma,extractor.sigma_r": [[0.002, 0.002], [0.01, 0.01], [0.03, 0.03]],
+             "extractor.k": [3, 5, 10]},
+    "seeds": [0],
+}
 #: ``demo``: the report, its tables, figures, sim2real outputs and its one sweep (experiments.demo).
 DEMO_OUTPUTS = OutTree(("report.md", "report.html"),
                        {"tables": STUDY_TABLES, "figures": OutTree(FIGURES_OUTPUTS.files),
-                        "sim2real": OutTree(SIM2REAL_OUTPUTS), "sweeps": OutTree(folders={"demo_k_vs_noise": SWEEP_OUTPUTS})})
+                        "sim2real": OutTree(SIM2REAL_OUTPUTS), "sweeps": OutTree(folders={DEMO_SWEEP["name"]: SWEEP_OUTPUTS})})
+
+
+def demo_sweep_files(out: Path) -> list[str]:
+    """The files of the demo's sweep that an earlier demo into ``out`` wrote by names a pattern stands for
+    (``sub/name``), named exactly: its cells, ``sweeps/NAME/cells/KEY.parquet`` for the key of each cell of
+    DEMO_SWEEP (``sweep.cell_key``; the sweep reads no file), and its plots, ``figures/sweep_NAME_METRIC.*``
+    for the metrics its table holds (``figures.make.sweep_stems``, as the demo drew them from it). The
+    patterns ``figures/sweep_demo_k_vs_noise_*`` and ``cells/*.parquet`` removed a user's files of such
+    names too, and the sweep's folder was removed whole before it ran. The demo removes them before it
+    writes its own; ``figures --out DEMO/figures`` keeps the plots."""
+    from experiments.figures.make import sweep_stems
+    from experiments.sweep import SweepSpec, cell_key
+    from lms200 import LmsbenchError
+
+    spec = SweepSpec.from_dict(DEMO_SWEEP)
+    folder = f"sweeps/{spec.name}"
+    names = [f"{folder}/cells/{cell_key(spec.kind, params)}.parquet" for params in spec.cells()]
+    try:  # a table the demo's sweep wrote: its plots are those of its metrics; none (or damaged): none drawn
+        stems = sweep_stems(out / folder) if (out / folder / "results.parquet").is_file() else []
+    except (LmsbenchError, OSError, ValueError):
+        stems = []
+    return names + [f"figures/{stem}{end}" for stem in stems for end in FIGURE_ENDS]
 
 
 #: Largest record a command reads to tell an earlier run's folder (bytes): YAML (the largest, a sweep's

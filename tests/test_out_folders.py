@@ -732,3 +732,17 @@ def test_a_figures_runs_sweep_plots_in_a_demos_figures_folder_go_with_the_next_r
         assert main(then) == 0, capsys.readouterr().err
         left = {p.name for p in (demo / "figures").iterdir()}
         assert not plots & left and "sweep_mine.csv" in left, (then[0], left)
+
+
+def test_the_demo_sweeps_files_are_named_by_one_public_function(tmp_path):
+    """The demo and `figures --out DEMO/figures` both name the demo's sweep files by
+    options.demo_sweep_files (figures called the demo's private _sweep_files), beside DEMO_SWEEP and the
+    demo's output tree, which named the sweep's folder a second time: its cells by their keys, and its
+    plots only where its table is."""
+    from experiments.options import DEMO_OUTPUTS, DEMO_SWEEP, demo_sweep_files
+    from experiments.sweep import SweepSpec, cell_key
+
+    spec = SweepSpec.from_dict(DEMO_SWEEP)
+    cells = [f"sweeps/{spec.name}/cells/{cell_key(spec.kind, params)}.parquet" for params in spec.cells()]
+    assert demo_sweep_files(tmp_path) == cells and len(cells) == 9
+    assert list(DEMO_OUTPUTS.folders["sweeps"].folders) == [spec.name]

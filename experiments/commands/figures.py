@@ -179,9 +179,9 @@ def _check_not_a_demos_figures(out: Path, tables: Path | None) -> None:
 def _remove_earlier_sweep_plots(out: Path) -> None:
     """In a demo's figures/ folder ``out``, remove the sweep plots an earlier figures run there lists in its
     figures.yaml, but the demo's own (of its sweep, by name): each a plain file name, no pattern."""
-    from experiments.demo import _sweep_files
+    from experiments.options import demo_sweep_files
 
-    own = {name.removeprefix("figures/") for name in _sweep_files(real_path(out).parent)}
+    own = {name.removeprefix("figures/") for name in demo_sweep_files(real_path(out).parent)}
     plots = tuple(n for n in recorded_names(out / "figures.yaml", "sweep_plots")
                   if n not in own and "/" not in n and not any(c in n for c in "*?["))
     if plots:
