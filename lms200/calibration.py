@@ -58,6 +58,11 @@ MAX_READING_SHARE = 1e-3  # a top value read this often (or more) is the logger'
 MIN_SCANS = 2  # a bootstrap over scans needs two
 MAX_SCANS = 20_000  # memory bound: scans beyond this many are not read
 MAX_READ = 10 * MAX_SCANS  # time bound: items read at most, repeats included (an endless repeat never ended)
+#: memory bound in beams: MAX_SCANS scans of an LMS200's 361 beams (the scans are kept: every measure is a pass over
+#: them, with temporaries of a few times their size). MAX_SCANS alone let wide scans through: 20,000 scans of 16,384
+#: beams (a Scan's most over 360 deg) are 2.6 GB of ranges, and 1,081-beam ones (a Hokuyo's 270 deg, which
+#: ``lmsbench calibrate`` refuses only once measured) 173 MB; at 361 beams or fewer the scan bound comes first
+MAX_KEPT_BEAMS = MAX_SCANS * 361
 TAIL_WINDOW = 20.0  # the tail fit uses residuals within this many core sigmas
 TAIL_CLUSTER_SIGMAS = 5.0  # a triple whose residual exceeds this many core sigmas is in the tail
 TAIL_CLUSTER_STEP = 3  # the tail's clustering pairs triples this many strides apart (no beam shared)
@@ -397,11 +402,12 @@ def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
             for fewer than ``MIN_SCANS`` scans, ``scans`` that are no Scans or records, or a
             ``seed`` that is not a whole number >= 0.
 
-    At most ``MAX_SCANS`` distinct scans are used and ``MAX_READ`` items read, repeats included.
+    At most ``MAX_SCANS`` distinct scans (and ``MAX_KEPT_BEAMS`` beams: fewer scans when they have more
+    than 361 beams) are used and ``MAX_READ`` items read, repeats included.
     """
     check_seed(seed)
     kept: list[Scan] = []
-    repeated = 0
+    repeated = kept_beams = 0
     for s in scans_of(scans):
         # A scan read twice is no second sample: a log whose every line came twice (written twice
         # over) was measured with each scan counted twice, its standard errors 1/sqrt(2) as large.
@@ -411,7 +417,8 @@ def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
                 break
             continue
         kept.append(s)
-        if len(kept) >= MAX_SCANS or repeated + len(kept) >= MAX_READ:
+        kept_beams += s.ranges.size
+        if len(kept) >= MAX_SCANS or kept_beams >= MAX_KEPT_BEAMS or repeated + len(kept) >= MAX_READ:
             break
     if len(kept) < MIN_SCANS:
         # "got 1" for 50 copies of one scan: the count of distinct scans, not what was given

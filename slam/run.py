@@ -109,11 +109,12 @@ def listed(items: Iterable[Any], name: str) -> Iterable[Any]:
 
 
 #: most scans one run reads (run_slam, run_steps, run_observations): 24 h of an LMS200 at its 75 Hz.
-#: A run keeps a few hundred bytes to 1 kB a scan whatever the scan (its pose, 3x3 covariance and per-scan
+#: A run keeps a few hundred bytes a scan whatever the scan (its pose, 3x3 covariance and per-scan
 #: diagnostics: the paper preset's result 185 B a scan, 1.2 GB at the bound; its peak while it runs
 #: 267 B a scan, 1.7 GB, its numpy blocks (:class:`Column`) and the result they are joined into; its
-#: Python lists were ~730 B, 4.7 GB. The default preset's peak: ~970 B a scan, 6.3 GB, its per-scan
-#: records being Python objects; tracemalloc, 20,000 vs 40,000 steps and 2,000 vs 4,000 scans); past
+#: Python lists were ~730 B, 4.7 GB. The default preset's result 163 B a scan, its peak 356 B, 2.3 GB,
+#: its per-scan values in Columns too (its ScanStep records, stamps, truths and anchor tuples in lists were
+#: ~990 B, 6.4 GB); tracemalloc, 20,000 vs 40,000 steps, 2,000 vs 4,000 scans and 300 vs 1,300 scans); past
 #: it a source is most likely one that never ends
 #: (``run_slam(itertools.repeat(record))`` ran for ever, its trajectory growing). An iterator is read
 #: up to it and the run ends there, with a SlamLimitWarning (its result kept: a live source, a day's
@@ -225,6 +226,10 @@ class Column:
             parts.append(block[max(len(block) - need, 0):])
             need -= len(block)
         return np.concatenate(parts[::-1])
+
+    def blocks(self) -> list[np.ndarray]:
+        """The rows as the blocks that hold them (views of their filled rows, oldest first; the column is kept)."""
+        return self.full + [self.block[:self.fill]]
 
     def taken(self) -> np.ndarray:
         """All rows as one array; the column is empty after (its blocks released)."""
@@ -367,7 +372,7 @@ def lost_against_scan(scores: Sequence[float] | np.ndarray, cfg) -> bool:
     return bool(np.all(last < cfg.point_min_score))
 
 
-def pose_nees(traj: np.ndarray, covs: np.ndarray, truths: list) -> np.ndarray:
+def pose_nees(traj: np.ndarray, covs: np.ndarray, truths: Iterable[Any]) -> np.ndarray:
     """Per-scan pose NEES ``e^T P^-1 e`` (3 dof) of an (n, 4) trajectory with (n, 3, 3) world-frame
     covariances against true poses (None where unknown: nan), in the truth frame anchored at the
     first true pose (the estimate's frame is that of its first pose)."""

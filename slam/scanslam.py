@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Iterator
 
 import numpy as np
 
@@ -27,6 +27,7 @@ from .correlative import Field, fit, free_share, free_space, make_field, search,
 from .icp import Match, Reference, chord_normals, chord_normals_at, match, refine
 from .keyframes import DISTINCT_THETA, DISTINCT_XY, Keyframe, LoopClosure, find_closure, find_closure_window, local_map
 from .posegraph import PoseGraph, robust_noise
+from .run import Column
 
 if TYPE_CHECKING:
     from .run import SlamResult
@@ -89,26 +90,40 @@ def degenerate_drift(infos: list[ScanStep], points: float) -> tuple[float, int |
     keyframe there would have added (its pose is held to the last keyframe by its own match the
     same way), without adding it to the stretch: so a stretch that makes no keyframe, where the
     estimate stands still along a corridor while the robot drives on, is counted too."""
-    best, at, cur, held = 0.0, None, 0.0, 0.0
-    for k, i in enumerate(infos):
+    drift = DegenerateDrift(points)
+    for i in infos:
+        drift.add(i)
+    return drift.best, drift.at
+
+
+class DegenerateDrift:
+    """:func:`degenerate_drift` fed one step at a time (``add``, in scan order; ``best``, ``at``: its
+    result so far), so that a run need not keep its ScanStep records (~600 B a scan) to compute it."""
+
+    def __init__(self, points: float) -> None:
+        self.points = points
+        self.best, self.cur, self.held, self.k = 0.0, 0.0, 0.0, 0  # k: the steps added
+        self.at: int | None = None
+
+    def add(self, i: ScanStep) -> None:
+        k, self.k = self.k, self.k + 1
         if np.isfinite(i.prediction_sigma):
-            held += i.prediction_sigma
+            self.held += i.prediction_sigma
         if not i.matched:
             if i.new_keyframe:  # the motion model's guess: neither adds nor ends a stretch, counted by matched_fraction
-                held = 0.0
-            continue
-        if not i.weak < points:
-            cur = held = 0.0  # the match holds every direction: the stretch, and what the predictions held, start again
-            continue
+                self.held = 0.0
+            return
+        if not i.weak < self.points:
+            self.cur = self.held = 0.0  # the match holds every direction: the stretch, and what the predictions held, start again
+            return
         if np.isfinite(i.weak_sigma):
-            reached = cur + min(i.weak_sigma * float(np.sqrt(i.factor_scale)), held)
-            if reached > best:
-                best, at = reached, k
+            reached = self.cur + min(i.weak_sigma * float(np.sqrt(i.factor_scale)), self.held)
+            if reached > self.best:
+                self.best, self.at = reached, k
             if i.new_keyframe:
-                cur = reached
+                self.cur = reached
         if i.new_keyframe:
-            held = 0.0
-    return best, at
+            self.held = 0.0
 
 
 def correlated_scale(points: np.ndarray, inliers: float, length: float) -> float:
@@ -199,8 +214,11 @@ class ScanSlam:
         self.ref: Reference | None = None
         self.pose = np.zeros(3)
         self.last: list[tuple[float, np.ndarray]] = []  # (stamp, pose) of the last two scans
-        self.anchors: list[tuple[int, np.ndarray]] = []  # per scan: keyframe key, pose in its frame
-        self.covariances: list[np.ndarray] = []  # per scan: covariance of the match (world frame)
+        # per scan, in numpy blocks (slam.run.Column: 104 B a scan, where a list of a tuple, an int and two
+        # arrays a scan held ~430 B): its keyframe's key, its pose in that keyframe's frame, the covariance of
+        # its match (world frame)
+        self.anchor_keys, self.anchor_poses = Column(np.int64), Column(np.float64, (3,))
+        self.covariances = Column(np.float64, (3, 3))
         self.loops: list[LoopClosure] = []
         self._kf_xy = np.zeros((0, 2))  # keyframe positions (current estimates) and path lengths, as arrays
         self._kf_travel = np.zeros(0)
@@ -262,7 +280,7 @@ class ScanSlam:
         if self.last and stamp - self.last[-1][0] > self.motion.max_gap:
             # a gap (a pause, two logs joined): no velocity across it; the motion restarts at the last pose
             self.last = self.last[-1:]
-            self.restarts.append(len(self.covariances))  # this scan's index
+            self.restarts.append(self.covariances.size)  # this scan's index
         if offsets is not None and self.alignment.deskew and len(self.last) >= 2:
             points = self.deskew(np.asarray(points, float).reshape(-1, 2), offsets)
         sp = ScanPoints.from_points(points, self.alignment)
@@ -348,8 +366,7 @@ class ScanSlam:
                 self.last[-1] = (t_prev, compose(moved, between(pose, p_prev)))
             pose = moved
         self.pose = pose
-        self.anchors.append((self.keyframes[-1].key, between(self.keyframes[-1].pose, pose)))
-        self.covariances.append(cov)
+        self._anchor(self.keyframes[-1].key, between(self.keyframes[-1].pose, pose), cov)
         self.last = [self.last[-1], (stamp, pose)]
         return info
 
@@ -531,13 +548,18 @@ class ScanSlam:
         dt2 = max(dt, 0.0) ** 2
         return mc.sigma_accel * dt2 + mc.sigma_floor_xy, mc.sigma_alpha * dt2 + mc.sigma_floor_theta
 
+    def _anchor(self, key: int, pose: np.ndarray, cov: np.ndarray) -> None:
+        """Keep the scan's keyframe ``key``, its ``pose`` in that keyframe's frame and its match's ``cov``."""
+        self.anchor_keys.append(key)
+        self.anchor_poses.append(pose)
+        self.covariances.append(cov)
+
     def _first(self, stamp: float, sp: ScanPoints) -> ScanStep:
         self.graph = PoseGraph(np.zeros(3), self.loop_cfg.prior_sigma)
         self.keyframes.append(Keyframe(0, 0, stamp, np.zeros(3), *sp.surface(), 0.0))
         self._kf_xy, self._kf_travel = np.zeros((1, 2)), np.zeros(1)
         self.ref = local_map(self.keyframes, self.keyframes_cfg.voxel)
-        self.anchors.append((0, np.zeros(3)))
-        self.covariances.append(np.zeros((3, 3)))
+        self._anchor(0, np.zeros(3), np.zeros((3, 3)))
         self.last = [(stamp, np.zeros(3))]
         return ScanStep(keyframe=0, new_keyframe=True)
 
@@ -549,7 +571,7 @@ class ScanSlam:
             info.factor_scale = correlated_scale(sp.matched, info.inliers, self.keyframes_cfg.correlation_length)
             cov = cov * info.factor_scale
         key = self.graph.add(rel, rotate_covariance(cov, -pose[2]), pose)  # world -> frame of pose
-        kf = Keyframe(key, len(self.anchors), stamp, pose.copy(), *sp.surface(), self.travelled)
+        kf = Keyframe(key, self.anchor_keys.size, stamp, pose.copy(), *sp.surface(), self.travelled)
         self.keyframes.append(kf)
         self._kf_xy = np.vstack((self._kf_xy, pose[:2]))
         self._kf_travel = np.append(self._kf_travel, self.travelled)
@@ -617,8 +639,8 @@ class ScanSlam:
         assert self.graph is not None
         kp = self.keyframe_poses()
         kcov = [rotate_covariance(self.graph.covariance(k), kp[k][2]) for k in range(len(kp))]
-        out = np.empty((len(self.anchors), 3, 3))
-        for i, ((k, rel), cov) in enumerate(zip(self.anchors, self.covariances)):
+        out = np.empty((self.anchor_keys.size, 3, 3))
+        for i, (k, rel, cov) in enumerate(self._anchors()):
             p = compose(kp[k], rel)
             J = np.array([[1.0, 0.0, -(p[1] - kp[k][1])], [0.0, 1.0, p[0] - kp[k][0]], [0.0, 0.0, 1.0]])
             out[i] = J @ kcov[k] @ J.T + (cov if rel.any() else 0.0)
@@ -628,7 +650,21 @@ class ScanSlam:
         """(n, 3) world pose of every scan: its keyframe's optimised pose composed with the scan's
         pose relative to that keyframe."""
         kp = self.keyframe_poses()
-        return np.array([compose(kp[k], rel) for k, rel in self.anchors]).reshape(-1, 3)
+        out = np.empty((self.anchor_keys.size, 3))
+        for i, (k, rel, _) in enumerate(self._anchors()):
+            out[i] = compose(kp[k], rel)
+        return out
+
+    def _anchors(self) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
+        """Every scan's keyframe key, pose in that keyframe's frame and match covariance, in scan order."""
+        for keys, poses, covs in zip(self.anchor_keys.blocks(), self.anchor_poses.blocks(), self.covariances.blocks()):
+            yield from zip(keys.tolist(), poses, covs)
+
+
+#: the ScanStep fields a run keeps per scan (its diagnostics), with their dtypes
+STEP_COLUMNS = {"inliers": np.float64, "matched": np.bool_, "keyframe": np.int64, "hypothesis": np.int64,
+                "ambiguous": np.bool_, "weak": np.float64, "weak_sigma": np.float64, "searched": np.bool_,
+                "fit": np.float64, "odometry": np.bool_, "odometry_doubt": np.bool_}
 
 
 def run_scan_slam(steps, config) -> "SlamResult":
@@ -644,9 +680,12 @@ def run_scan_slam(steps, config) -> "SlamResult":
     from .run import SlamResult, extract_all, lost_against_scan, pose_nees
 
     slam = ScanSlam(config.alignment, config.motion, config.keyframes, config.loop_closure)
-    stamps: list[float] = []
-    truths: list = []
-    infos: list[ScanStep] = []
+    cc = config.consistency
+    # per scan, in numpy blocks (Column), not a list of its ScanStep, stamp and truth (~990 B a scan at the
+    # peak of a run, 6.4 GB at MAX_SLAM_SCANS): its stamp, true pose (nan: none) and the diagnostics kept
+    stamps, truths, has_truth = Column(np.float64), Column(np.float64, (3,)), Column(np.bool_)
+    steps_kept = {name: Column(kind) for name, kind in STEP_COLUMNS.items()}
+    drifts = DegenerateDrift(cc.degenerate_points)
     kf_scans: dict[int, object] = {}  # keyframe key -> its scan, for the map's lines
     previous = None
     for k, (t, scan, odom, truth) in enumerate(steps):
@@ -658,37 +697,39 @@ def run_scan_slam(steps, config) -> "SlamResult":
         if info.new_keyframe:
             kf_scans[info.keyframe] = scan
         stamps.append(t)
-        truths.append(truth)
-        infos.append(info)
-    if not stamps:
+        truths.append(np.nan if truth is None else truth)
+        has_truth.append(truth is not None)
+        for name, column in steps_kept.items():
+            column.append(getattr(info, name))
+        drifts.add(info)
+    if not stamps.size:
         raise SlamInputError("no scans in the input")
     poses = slam.trajectory()
     kposes = slam.keyframe_poses()
-    traj = np.column_stack((stamps, poses))
+    t_all = stamps.taken()
+    traj = np.column_stack((t_all, poses))
     covs = slam.pose_covariances()
     keys = list(kf_scans)
     fsets = extract_all([kf_scans[k] for k in keys], config)  # one compiled call over the keyframes
     segs = [_place(kposes[key], seg) for key, fs in zip(keys, fsets) if (seg := _segments(fs, config)).size]
     lines = merge_lines(np.concatenate(segs) if segs else np.zeros((0, 4)))
-    inliers = np.array([i.inliers for i in infos])
-    matched = np.array([i.matched for i in infos])
-    nees = pose_nees(traj, covs, truths)
+    kept = {name: column.taken() for name, column in steps_kept.items()}
+    inliers, matched = kept["inliers"], kept["matched"]
+    true_poses = truths.taken()
+    nees = pose_nees(traj, covs, (row if has else None for row, has in zip(true_poses, has_truth.taken())))
     diverged_at = None
-    scores: list[float] = []
-    for t, i in zip(stamps, infos):
-        scores.append(i.inliers)
-        if lost_against_scan(scores, config.consistency):
-            diverged_at = float(t)
+    for k in range(len(t_all)):
+        if lost_against_scan(inliers[:k + 1], cc):
+            diverged_at = float(t_all[k])
             break
     finite = nees[np.isfinite(nees)]
-    ambiguous = np.array([i.ambiguous for i in infos])
-    cc = config.consistency
-    drift, drift_at = degenerate_drift(infos, cc.degenerate_points)
+    ambiguous = kept["ambiguous"]
+    drift, drift_at = drifts.best, drifts.at
     ambiguous_fraction = float(ambiguous[1:].mean()) if ambiguous.size > 1 else 0.0
     matched_fraction = float(matched[1:].mean()) if matched.size > 1 else 1.0
     diag = {
         "inliers": inliers, "matched": matched, "nees": nees,
-        "keyframe": np.array([i.keyframe for i in infos]), "hypothesis": np.array([i.hypothesis for i in infos]),
+        "keyframe": kept["keyframe"], "hypothesis": kept["hypothesis"],
         "n_keyframes": len(slam.keyframes), "n_loops": len(slam.loops),
         "loops": [{"old": lp.old, "new": lp.new, "inliers": lp.inliers, "rms": lp.rms, "correction": lp.correction,
                    "old_stamp": slam.keyframes[lp.old].stamp, "new_stamp": slam.keyframes[lp.new].stamp}
@@ -699,21 +740,21 @@ def run_scan_slam(steps, config) -> "SlamResult":
                     and ambiguous_fraction <= config.consistency.max_ambiguous
                     and matched_fraction >= config.consistency.min_matched_fraction
                     and not cc.degenerate_stretch_flagged(drift)),
-        "weak": np.array([i.weak for i in infos]), "weak_sigma": np.array([i.weak_sigma for i in infos]),
-        "degenerate_fraction": float(np.mean([i.matched and i.weak < cc.degenerate_points for i in infos[1:]]))
-        if len(infos) > 1 else 0.0,
-        "degenerate_drift": drift, "degenerate_drift_at": None if drift_at is None else stamps[drift_at],
-        "searched": np.array([i.searched for i in infos]), "ambiguous": ambiguous, "fit": np.array([i.fit for i in infos]),
-        "searched_fraction": float(np.mean([i.searched for i in infos[1:]])) if len(infos) > 1 else 0.0,
+        "weak": kept["weak"], "weak_sigma": kept["weak_sigma"],
+        "degenerate_fraction": float(np.mean(matched[1:] & (kept["weak"][1:] < cc.degenerate_points)))
+        if len(t_all) > 1 else 0.0,
+        "degenerate_drift": drift, "degenerate_drift_at": None if drift_at is None else float(t_all[drift_at]),
+        "searched": kept["searched"], "ambiguous": ambiguous, "fit": kept["fit"],
+        "searched_fraction": float(np.mean(kept["searched"][1:])) if len(t_all) > 1 else 0.0,
         "ambiguous_fraction": ambiguous_fraction,
         "mean_nis_per_dof": float("nan"), "mean_nees": float(finite.mean()) if finite.size else float("nan"),
         "matched_fraction": matched_fraction,
     }
     if config.motion.use_odometry:  # the steps the odometry predicted (the rest: no odometry, or a step beyond the search)
-        diag["odometry_fraction"] = float(np.mean([i.odometry for i in infos[1:]])) if len(infos) > 1 else 0.0
-        doubt = np.array([i.odometry_doubt for i in infos])
+        diag["odometry_fraction"] = float(np.mean(kept["odometry"][1:])) if len(t_all) > 1 else 0.0
+        doubt = kept["odometry_doubt"]
         diag["odometry_doubt"] = doubt
-        diag["odometry_doubt_fraction"] = float(doubt[1:].mean()) if len(infos) > 1 else 0.0
+        diag["odometry_doubt_fraction"] = float(doubt[1:].mean()) if len(t_all) > 1 else 0.0
         diag["healthy"] = diag["healthy"] and diag["odometry_doubt_fraction"] <= config.consistency.max_odometry_doubt
     return SlamResult(traj, covs, lines, np.zeros((0, 3)), diag)
 

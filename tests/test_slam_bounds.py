@@ -298,3 +298,37 @@ def test_lmsbench_slam_says_its_runs_bound_before_a_baseline_fails(tmp_path, mon
     assert [str(w.message).split(" of ")[1:3] for w in said if issubclass(w.category, SlamBoundWarning)] == [
         ["12 scans", "this run (paper preset): beyond observations.max_lines (1, a bound"]]
     assert (tmp_path / "out" / "trajectory.tum").is_file()
+
+
+def test_run_scan_slam_keeps_near_its_result_s_size_a_scan(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Defect: the default preset kept every scan's ScanStep record, stamp and truth in Python lists
+    and its anchor (a tuple of an int and two arrays), ~990 B a scan at its peak (tracemalloc) for a
+    result of 163 B a scan: 6.4 GB at MAX_SLAM_SCANS. They are now numpy blocks (of 64 rows here;
+    the scans have no valid beam, so no matching: cheap steps that keep as much a scan as any),
+    and the degenerate-drift check is fed a step at a time: the peak grows by under 2.5 times the
+    result's size a scan (356 B). The result is that of the lists: tests/test_slam_degenerate.py, and
+    MIT CSAIL's trajectory, keyframes and map were byte-identical before and after."""
+    import tracemalloc
+
+    import slam.run
+
+    monkeypatch.setattr(slam.run.Column, "BLOCK_ROWS", 64)
+    config = SlamConfig()
+
+    def measured(n: int) -> tuple[int, int]:
+        records = (Record(Scan(np.full(8, np.nan), -0.1, 0.01, 0.0, 8.0, stamp=0.1 * k), truth=(0.01 * k, 0.0, 0.0))
+                   for k in range(n))
+        tracemalloc.start()
+        try:
+            result = run_slam(records, config)
+            peak = tracemalloc.get_traced_memory()[1]
+        finally:
+            tracemalloc.stop()
+        arrays = [result.trajectory, result.covariances] + [v for v in result.diagnostics.values() if isinstance(v, np.ndarray)]
+        return peak, sum(a.nbytes for a in arrays)
+
+    measured(20)  # first-run caches out of the measure
+    (peak_a, size_a), (peak_b, size_b) = measured(300), measured(1300)
+    per_scan = (size_b - size_a) / 1000
+    assert per_scan >= 160  # pose and stamp 32 B, covariance 72 B, 11 diagnostics, NEES
+    assert (peak_b - peak_a) / 1000 < 2.5 * per_scan, ((peak_b - peak_a) / 1000, per_scan)

@@ -199,14 +199,14 @@ def test_degenerate_drift_uses_the_keyframe_factors_scaled_std(monkeypatch):
 
     steps = [_step(weak=3.0, sigma=0.1, scale=4.0), _step(weak=3.0, sigma=0.1, scale=1.0)]
     assert scanslam.degenerate_drift(steps, 10.0) == (pytest.approx(0.3), 1)
-    seen: list[list[ScanStep]] = []
-    drift = scanslam.degenerate_drift
-    monkeypatch.setattr(scanslam, "degenerate_drift", lambda infos, points: (seen.append(infos), drift(infos, points))[1])
+    seen: dict[object, list[ScanStep]] = {}  # a run's DegenerateDrift (kept: no id reused) -> the steps it was fed
+    add = scanslam.DegenerateDrift.add
+    monkeypatch.setattr(scanslam.DegenerateDrift, "add", lambda self, i: (seen.setdefault(self, []).append(i), add(self, i)))
     records = simulate_records("office", seed=0, duration=10.0, rate_hz=5.0)
     base = SlamConfig(loop_closure=dataclasses.replace(SlamConfig().loop_closure, enabled=False))
     wide = dataclasses.replace(base, keyframes=dataclasses.replace(base.keyframes, correlation_length=1.0))
     run_slam(records, base), run_slam(records, wide)
-    scales = [[i.factor_scale for i in infos if i.new_keyframe and i.matched] for infos in seen]
+    scales = [[i.factor_scale for i in infos if i.new_keyframe and i.matched] for infos in seen.values()]
     assert scales[0] and set(scales[0]) == {1.0}
     assert min(scales[1]) >= 1.0 and np.median(scales[1]) > 2.0
 

@@ -158,6 +158,21 @@ def choice(name: str, value: object, allowed: tuple[str, ...]) -> None:
         fail(name, f"must be one of {', '.join(allowed)}", value)
 
 
+def plain_numbers(cfg: object) -> None:
+    """Each number field of the dataclass ``cfg`` (checked) as a plain Python int or float: an
+    integer of a numpy type as ``int``, any other real number (a numpy float, a ``Fraction``) as
+    ``float``; bools, text and other values kept. The numpy-vectorised methods (hough, ransac) did
+    their arithmetic in the type given: ``hypotheses=np.uint8(3)`` overflowed at the first scan
+    (OverflowError: 361 out of bounds for uint8), ``alpha_step`` or ``breakpoint_lambda`` given as a
+    ``Fraction`` made object arrays that np.cos / np.sin refused (TypeError), each after the config
+    was taken (a probe of odd but valid values)."""
+    for f in dataclasses.fields(cfg):  # type: ignore[arg-type]
+        value = getattr(cfg, f.name)
+        if type(value) in (int, float) or isinstance(value, (bool, np.bool_)) or not is_real(value):
+            continue
+        object.__setattr__(cfg, f.name, int(value) if isinstance(value, (int, np.integer)) else float(value))
+
+
 def shared_fields(cfg: object) -> None:
     """The fields every baseline has: sigma, breakpoint_lambda, min_points, min_length, max_skip,
     runs_z, corners."""
@@ -181,3 +196,4 @@ def shared_fields(cfg: object) -> None:
         object.__setattr__(cfg, "corners", corners)
     if not isinstance(cfg.corners, CornerConfig):
         fail("corners", "must be a CornerConfig (or a mapping of its fields)", cfg.corners)
+    plain_numbers(cfg)
