@@ -416,6 +416,8 @@ def calibrate_scans(scans: Iterable[Any], seed: int = 0) -> LogCalibration:
             if repeated + len(kept) >= MAX_READ:  # itertools.repeat(scan) was read for ever (fuzzing)
                 break
             continue
+        if kept_beams + s.ranges.size > MAX_KEPT_BEAMS:  # tested before keeping it: never more than the bound
+            break
         kept.append(s)
         kept_beams += s.ranges.size
         if len(kept) >= MAX_SCANS or kept_beams >= MAX_KEPT_BEAMS or repeated + len(kept) >= MAX_READ:

@@ -216,9 +216,9 @@ class ScanSlam:
         self.last: list[tuple[float, np.ndarray]] = []  # (stamp, pose) of the last two scans
         # per scan, in numpy blocks (slam.run.Column: 104 B a scan, where a list of a tuple, an int and two
         # arrays a scan held ~430 B): its keyframe's key, its pose in that keyframe's frame, the covariance of
-        # its match (world frame)
+        # its match (world frame); read as lists, as before the blocks, through :attr:`anchors` and :attr:`covariances`
         self.anchor_keys, self.anchor_poses = Column(np.int64), Column(np.float64, (3,))
-        self.covariances = Column(np.float64, (3, 3))
+        self._covariances = Column(np.float64, (3, 3))
         self.loops: list[LoopClosure] = []
         self._kf_xy = np.zeros((0, 2))  # keyframe positions (current estimates) and path lengths, as arrays
         self._kf_travel = np.zeros(0)
@@ -280,7 +280,7 @@ class ScanSlam:
         if self.last and stamp - self.last[-1][0] > self.motion.max_gap:
             # a gap (a pause, two logs joined): no velocity across it; the motion restarts at the last pose
             self.last = self.last[-1:]
-            self.restarts.append(self.covariances.size)  # this scan's index
+            self.restarts.append(self._covariances.size)  # this scan's index
         if offsets is not None and self.alignment.deskew and len(self.last) >= 2:
             points = self.deskew(np.asarray(points, float).reshape(-1, 2), offsets)
         sp = ScanPoints.from_points(points, self.alignment)
@@ -552,7 +552,7 @@ class ScanSlam:
         """Keep the scan's keyframe ``key``, its ``pose`` in that keyframe's frame and its match's ``cov``."""
         self.anchor_keys.append(key)
         self.anchor_poses.append(pose)
-        self.covariances.append(cov)
+        self._covariances.append(cov)
 
     def _first(self, stamp: float, sp: ScanPoints) -> ScanStep:
         self.graph = PoseGraph(np.zeros(3), self.loop_cfg.prior_sigma)
@@ -657,8 +657,20 @@ class ScanSlam:
 
     def _anchors(self) -> Iterator[tuple[int, np.ndarray, np.ndarray]]:
         """Every scan's keyframe key, pose in that keyframe's frame and match covariance, in scan order."""
-        for keys, poses, covs in zip(self.anchor_keys.blocks(), self.anchor_poses.blocks(), self.covariances.blocks()):
+        for keys, poses, covs in zip(self.anchor_keys.blocks(), self.anchor_poses.blocks(), self._covariances.blocks()):
             yield from zip(keys.tolist(), poses, covs)
+
+    @property
+    def anchors(self) -> list[tuple[int, np.ndarray]]:
+        """Every scan's (keyframe key, (3,) pose (m, m, rad) in that keyframe's frame), in scan order: a
+        list built from the blocks at each read (a copy: changing it changes nothing in the run)."""
+        return [(k, rel.copy()) for k, rel, _ in self._anchors()]
+
+    @property
+    def covariances(self) -> list[np.ndarray]:
+        """Every scan's (3, 3) match covariance (world frame), in scan order: a list built from the
+        blocks at each read (a copy, as :attr:`anchors`); :meth:`pose_covariances` adds the graph's."""
+        return [cov.copy() for _, _, cov in self._anchors()]
 
 
 #: the ScanStep fields a run keeps per scan (its diagnostics), with their dtypes

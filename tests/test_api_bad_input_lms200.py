@@ -347,21 +347,24 @@ def test_calibrate_scans_reads_an_endless_repeat_to_a_bound() -> None:
         calibrate_scans(itertools.islice(itertools.repeat(scan), MAX_READ + 5))  # endless: the same (old code: "got 200005")
 
 
-def test_calibrate_scans_keeps_a_bounded_number_of_beams(monkeypatch: pytest.MonkeyPatch) -> None:
+@pytest.mark.parametrize(("bound", "used"), [(20 * 1000, 20), (20 * 1000 - 1, 19)])
+def test_calibrate_scans_keeps_a_bounded_number_of_beams(monkeypatch: pytest.MonkeyPatch, bound: int, used: int) -> None:
     """calibrate_scans kept up to MAX_SCANS (20,000) scans whatever their width: 2.6 GB of ranges at
     16,384 beams. It now stops at MAX_KEPT_BEAMS beams too (made 20 scans of 1,000 beams here), which
-    at an LMS200's 361 beams is the scan bound itself, so no log of 361 beams or fewer changes."""
+    at an LMS200's 361 beams is the scan bound itself, so no log of 361 beams or fewer changes. A scan
+    that would take the beams past the bound is not kept (it was, then the bound was tested: 20 scans
+    under a bound of 19,999 beams)."""
     import lms200.calibration as calibration
 
     assert calibration.MAX_KEPT_BEAMS == calibration.MAX_SCANS * 361
-    monkeypatch.setattr(calibration, "MAX_KEPT_BEAMS", 20 * 1000)
+    monkeypatch.setattr(calibration, "MAX_KEPT_BEAMS", bound)
     rng = np.random.default_rng(2)
     inc = np.pi / 999
     b = -np.pi / 2 + inc * np.arange(1000)
     walls = np.minimum(3.0 / np.maximum(np.abs(np.cos(b)), 1e-3), 2.5 / np.maximum(np.abs(np.sin(b)), 1e-3))
     scans = (Scan(np.minimum(walls, 7.9) + 0.005 * rng.standard_normal(1000), -np.pi / 2, inc, 0.0, 8.0, stamp=0.1 * k)
              for k in range(50))
-    assert calibration.calibrate_scans(scans).n_scans == 20  # was 50
+    assert calibration.calibrate_scans(scans).n_scans == used  # was 50
 
 
 def test_quarter_degree_midpoints_of_too_close_and_no_return_are_not_valid_without_a_warning() -> None:

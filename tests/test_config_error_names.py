@@ -61,3 +61,41 @@ def test_a_config_taken_with_an_odd_number_type_extracts_as_with_the_plain_numbe
                 float(b[0]), float(np.deg2rad(0.5)), 0.0, 8.183)
     fs = extract(scan, method, config=cfg)
     assert len(fs.lines) >= 3 and fs == extract(scan, method, config=make_config(method, **{field: float(value) if isinstance(plain, float) else plain}))
+
+
+HUGE = "Fraction(10**400)"  # beyond float64: float() raised OverflowError
+TINY = "Fraction(1, 10**400)"  # nonzero, rounds to 0.0 in float64
+
+
+@pytest.mark.parametrize(("method", "params", "message"), [
+    ("split_merge", {"split_threshold": HUGE}, r"^split_threshold: must be a width in \[0.0001, 1\] m, got Fraction\(1000"),
+    ("hough", {"max_lines": HUGE}, r"^max_lines: must be an integer >= 1, got Fraction\(1000"),
+    ("ransac", {"max_failures": HUGE}, r"^max_failures: must be an integer >= 1 and <= \d+, got Fraction\(1000"),
+    ("iepf", {"sigma_fit": HUGE}, r"^sigma_fit: must be a range noise std in \[1e-06, 1000\] m, got Fraction\(1000"),
+    ("split_merge", {"merge_sigmas": TINY}, r"^merge_sigmas: must be 0 \(off\) or a number in \[1, 100\] std, got Fraction\(1, 1000"),
+    ("split_merge", {"merge_sigmas": "np.longdouble('1e-400')"}, r"^merge_sigmas: .*, got np.longdouble\('1e-400'\)$"),
+    ("split_merge", {"merge_sigmas": "Fraction(1, 3)"}, r"^merge_sigmas: .* std, got Fraction\(1, 3\)$"),
+    ("split_merge", {"merge_rms": TINY}, r"^merge_rms: is nonzero but rounds to 0 in float64 .*, got Fraction\(1, 1000"),
+    ("iepf", {"corners": {"max_distance": TINY}}, r"^corners\.max_distance: is nonzero but rounds to 0 in float64 "),
+])
+def test_a_field_checked_after_the_shared_ones_sees_and_quotes_the_value_given(method, params, message) -> None:
+    """The number fields were made plain floats at the end of the shared checks, before a method's
+    own later checks: a huge Fraction raised OverflowError (not ConfigError), a tiny one ran as 0.0
+    (off), and a message quoted the rounded value (0.3333333333333333 for Fraction(1, 3))."""
+    from fractions import Fraction
+
+    import numpy as np
+
+    names = {"Fraction": Fraction, "np": np}
+    given = {k: ({f: eval(x, names) for f, x in v.items()} if isinstance(v, dict) else eval(v, names))
+             for k, v in params.items()}
+    with pytest.raises(ConfigError, match=message):
+        make_config(method, **given)
+
+
+def test_a_corner_field_given_as_a_fraction_is_kept_as_the_nearest_float() -> None:
+    from fractions import Fraction
+
+    corners = make_config("split_merge", corners={"sigma": Fraction(1, 100), "max_gap_beams": __import__("numpy").int16(4)}).corners
+    assert type(corners.sigma) is float and corners.sigma == 0.01
+    assert type(corners.max_gap_beams) is int and corners.max_gap_beams == 4

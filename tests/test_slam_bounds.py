@@ -332,3 +332,30 @@ def test_run_scan_slam_keeps_near_its_result_s_size_a_scan(monkeypatch: pytest.M
     per_scan = (size_b - size_a) / 1000
     assert per_scan >= 160  # pose and stamp 32 B, covariance 72 B, 11 diagnostics, NEES
     assert (peak_b - peak_a) / 1000 < 2.5 * per_scan, ((peak_b - peak_a) / 1000, per_scan)
+
+
+def test_scanslam_anchors_and_covariances_read_as_the_lists_they_were() -> None:
+    """ScanSlam is public (docs/slam.md: harnesses on ScanSlam.step): keeping its per-scan anchors and
+    match covariances in numpy blocks removed ``anchors`` and made ``covariances`` a Column (no len, no
+    indexing). Both read again as lists of the same values and types: (int key, (3,) pose in the
+    keyframe's frame) and (3, 3) arrays, the first scan's (0, zeros) and zeros; here the sensor moves
+    5 cm along x in a 6 m x 5 m box, so the second scan's pose in the first keyframe's is (0.05, 0, 0)."""
+    from slam.scanslam import ScanSlam
+
+    b = np.deg2rad(0.5) * (np.arange(361) - 180)
+    r = np.minimum(3.0 / np.maximum(np.abs(np.cos(b)), 1e-3), 2.5 / np.maximum(np.abs(np.sin(b)), 1e-3))
+    s = ScanSlam()
+    for i in range(2):
+        s.step(0.2 * i, np.c_[r * np.cos(b) - 0.05 * i, r * np.sin(b)])
+    covs, anchors = s.covariances, s.anchors
+    assert isinstance(covs, list) and len(covs) == 2 and isinstance(anchors, list) and len(anchors) == 2
+    assert all(type(k) is int and k == 0 and rel.shape == (3,) and rel.dtype == np.float64 for k, rel in anchors)
+    np.testing.assert_array_equal(anchors[0][1], np.zeros(3))
+    np.testing.assert_allclose(anchors[-1][1], [0.05, 0.0, 0.0], atol=1e-6)
+    np.testing.assert_array_equal(covs[0], np.zeros((3, 3)))
+    last = covs[-1]
+    assert last.shape == (3, 3) and last.dtype == np.float64
+    np.testing.assert_allclose(last, last.T, rtol=0, atol=1e-9 * np.abs(last).max())
+    assert np.all(np.linalg.eigvalsh(last) > 0)  # a match's covariance, not the first scan's zeros
+    covs[-1][:] = 1.0  # a copy: the run's own values stay
+    assert not np.array_equal(s.covariances[-1], covs[-1])

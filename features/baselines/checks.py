@@ -159,23 +159,39 @@ def choice(name: str, value: object, allowed: tuple[str, ...]) -> None:
 
 
 def plain_numbers(cfg: object) -> None:
-    """Each number field of the dataclass ``cfg`` (checked) as a plain Python int or float: an
-    integer of a numpy type as ``int``, any other real number (a numpy float, a ``Fraction``) as
-    ``float``; bools, text and other values kept. The numpy-vectorised methods (hough, ransac) did
-    their arithmetic in the type given: ``hypotheses=np.uint8(3)`` overflowed at the first scan
-    (OverflowError: 361 out of bounds for uint8), ``alpha_step`` or ``breakpoint_lambda`` given as a
-    ``Fraction`` made object arrays that np.cos / np.sin refused (TypeError), each after the config
-    was taken (a probe of odd but valid values)."""
+    """Each number field of the dataclass ``cfg`` as a plain Python int or float, called once every
+    check of ``cfg`` has run (so that a ConfigError quotes the value given, and a check sees it
+    unrounded): an integer of a numpy type as ``int``, any other real number (a numpy float, a
+    ``Fraction``) as ``float``, the nearest float64 where it is not exactly one (``Fraction(1, 3)``:
+    0.3333333333333333); bools, text and other values kept. A value beyond float64's range, or
+    nonzero but rounding to 0 in it, raises ConfigError naming the field (it raised OverflowError,
+    or ran as 0, i.e. off). The numpy-vectorised methods (hough, ransac) did their arithmetic in the
+    type given: ``hypotheses=np.uint8(3)`` overflowed at the first scan (OverflowError: 361 out of
+    bounds for uint8), ``alpha_step`` or ``breakpoint_lambda`` given as a ``Fraction`` made object
+    arrays that np.cos / np.sin refused (TypeError), each after the config was taken (a probe of
+    odd but valid values)."""
     for f in dataclasses.fields(cfg):  # type: ignore[arg-type]
         value = getattr(cfg, f.name)
         if type(value) in (int, float) or isinstance(value, (bool, np.bool_)) or not is_real(value):
             continue
-        object.__setattr__(cfg, f.name, int(value) if isinstance(value, (int, np.integer)) else float(value))
+        if isinstance(value, (int, np.integer)):
+            object.__setattr__(cfg, f.name, int(value))
+            continue
+        try:
+            plain = float(value)
+        except OverflowError:
+            fail(f.name, "must be a number within float64's range (up to 1.8e308)", value)
+        if isinstance(value, np.floating) and math.isinf(plain) and np.isfinite(value):  # a longdouble: inf
+            fail(f.name, "must be a number within float64's range (up to 1.8e308)", value)
+        if plain == 0.0 and value != 0:
+            fail(f.name, "is nonzero but rounds to 0 in float64 (its smallest nonzero number is 4.9e-324); "
+                 "write 0 for zero", value)
+        object.__setattr__(cfg, f.name, plain)
 
 
 def shared_fields(cfg: object) -> None:
-    """The fields every baseline has: sigma, breakpoint_lambda, min_points, min_length, max_skip,
-    runs_z, corners."""
+    """The checks of the fields every baseline has: sigma, breakpoint_lambda, min_points, min_length,
+    max_skip, runs_z, corners. The caller runs ``plain_numbers`` once its own checks are done."""
     noise_sigma("sigma", cfg.sigma)
     breakpoint_angle("breakpoint_lambda", cfg.breakpoint_lambda)
     integer("min_points", cfg.min_points, 2)
@@ -196,4 +212,3 @@ def shared_fields(cfg: object) -> None:
         object.__setattr__(cfg, "corners", corners)
     if not isinstance(cfg.corners, CornerConfig):
         fail("corners", "must be a CornerConfig (or a mapping of its fields)", cfg.corners)
-    plain_numbers(cfg)

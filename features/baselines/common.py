@@ -234,6 +234,7 @@ class CornerConfig:
         checks.between("max_distance", self.max_distance, 0.0, checks.MAX_BAND_M, "m")
         checks.breakpoint_angle("breakpoint_lambda", self.breakpoint_lambda)
         checks.noise_sigma("sigma", self.sigma)
+        checks.plain_numbers(self)  # as the methods' own fields: a Fraction sigma was kept as given
         object.__setattr__(self, "_params", engine.CornerParams(
             float(self.min_turn), checks.beams(self.max_gap_beams), float(self.max_distance), float(self.breakpoint_lambda),
             float(self.sigma)))

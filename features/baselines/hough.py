@@ -74,6 +74,7 @@ class HoughConfig:
         checks.shared_fields(self)
         checks.integer("max_lines", self.max_lines, 1)
         checks.integer("max_failures", self.max_failures, 1, checks.MAX_FAILURES)
+        checks.plain_numbers(self)  # after every check: they see (and quote) the values given
 
 
 MAX_CELLS = 1 << 21  # most accumulator cells (16 MB of counts)

@@ -87,6 +87,7 @@ class RansacConfig:
         checks.integer("max_failures", self.max_failures, 1, checks.MAX_FAILURES)
         checks.integer("max_lines", self.max_lines, 1)
         checks.integer("seed", self.seed, 0)
+        checks.plain_numbers(self)  # after every check: they see (and quote) the values given
 
 
 CHUNK = 1 << 18  # (hypothesis, point) distances computed at once (bounds the temporaries)

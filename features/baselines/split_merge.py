@@ -98,7 +98,7 @@ class SplitMergeConfig:
 
 def check_split_fields(cfg: object, chord: bool) -> None:
     """The checks of a SplitMergeConfig or IepfConfig (ConfigError naming the field), then its
-    kernels' record (``split_params``) kept on it as ``_params``."""
+    numbers as plain ints and floats (``checks.plain_numbers``) and its kernels' record (``split_params``) kept on it as ``_params``."""
     checks.shared_fields(cfg)
     if cfg.sigma_fit is not None:
         checks.noise_sigma("sigma_fit", cfg.sigma_fit)  # 1e-300: every beam splits; 1e300: one line a scan
@@ -106,6 +106,7 @@ def check_split_fields(cfg: object, chord: bool) -> None:
     checks.sigmas("split_sigmas", cfg.split_sigmas)
     checks.between("merge_rms", cfg.merge_rms, 0.0, checks.MAX_BAND_M, "m")  # 0: the noise-following part alone
     checks.sigmas("merge_sigmas", cfg.merge_sigmas)
+    checks.plain_numbers(cfg)  # after every check: they see (and quote) the values given
     object.__setattr__(cfg, "_params", split_params(cfg, chord))
 
 
