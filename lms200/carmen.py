@@ -888,24 +888,29 @@ LAST_LINES_BLOCK = 1 << 16  # bytes read at a time from a plain log's end (:func
 
 
 def _lines_from_end(path: Path) -> Iterator[bytes]:
-    """A plain file's lines, its last first (a line longer than ``MAX_LINE_CHARS``, which the reader
-    refuses, is left out)."""
+    """A plain file's lines, its last first, without their newlines (a line the reader refuses as
+    longer than ``MAX_LINE_CHARS``, its newline counted, is left out)."""
     with open(path, "rb") as f:
         pos = f.seek(0, os.SEEK_END)
         rest, long = b"", False  # the start of the line that ends the block read last; it runs on past MAX_LINE_CHARS
+        ended = False  # the line yielded next ends in a newline (all but the file's last piece)
+
+        def fits(line: bytes) -> bool:  # a piece of up to MAX_LINE_CHARS + a block: the reader reads a line whole
+            return len(line) + ended <= MAX_LINE_CHARS
+
         while pos > 0:
             step = min(LAST_LINES_BLOCK, pos)
             pos -= step
             f.seek(pos)
             pieces = (f.read(step) + rest).split(b"\n")
             for line in reversed(pieces[1:]):
-                if not long:
+                if not long and fits(line):
                     yield line
-                long = False
+                long, ended = False, True
             rest = pieces[0]
             if len(rest) > MAX_LINE_CHARS:
                 rest, long = b"", True
-        if not long:
+        if not long and fits(rest):
             yield rest
 
 

@@ -43,3 +43,29 @@ def test_the_real_logs_last_stamps(shared_data):
     for name in ("mit-csail.clf.gz", "csail-robotlaser1.log.gz"):
         reader = read_log(shared_data / name)
         assert reader.last_stamp() == [r.scan.stamp for r in reader][-1]
+
+
+def _flaser(k: int, stamp: float, beams: int = 361, announced: int | None = None) -> str:
+    """A FLASER line of scan ``k``: ``beams`` ranges, announcing ``announced`` (default ``beams``)."""
+    ranges = " ".join([f"{2.0 + 0.001 * k:.3f}"] * beams)
+    x = 0.01 * k
+    return f"FLASER {announced or beams} {ranges} {x} 0 0 {x} 0 0 {stamp:.6f} host {stamp:.6f}\n"
+
+
+@pytest.mark.parametrize("name", ["long.clf", "long.clf.gz"])
+def test_a_last_line_longer_than_the_reader_takes_gives_no_stamp(tmp_path, monkeypatch, name):
+    """A last laser line that adds up but is longer than MAX_LINE_CHARS (here 4000, the line ~6000), which
+    the reader refuses: read back from a plain file's end it gave its stamp (99 s), the reader's last
+    scan being at 10.4 s."""
+    import gzip
+
+    from lms200 import carmen
+
+    monkeypatch.setattr(carmen, "MAX_LINE_CHARS", 4000)
+    text = "".join(_flaser(k, 10.0 + 0.1 * k) for k in range(5)) + _flaser(5, 99.0, beams=1000)
+    assert len(text.splitlines()[-1]) > carmen.MAX_LINE_CHARS
+    path = tmp_path / name
+    with (gzip.open(path, "wt") if name.endswith(".gz") else open(path, "w")) as f:
+        f.write(text)
+    stamps = [r.scan.stamp for r in read_log(path, skip_bad_lines=True)]
+    assert read_log(path).last_stamp() == pytest.approx(stamps[-1]) == pytest.approx(10.4)
