@@ -916,19 +916,36 @@ def _lines_from_end(path: Path) -> Iterator[bytes]:
 
 def _compressed_lines_of(path: Path, kind: str, kept: int = 16) -> Iterator[bytes]:
     """The last ``kept`` lines of a compressed log that start with ``kind``, its last first, from one
-    decompressing pass (damage ends the pass where it is)."""
+    decompressing pass (damage ends the pass where it is), then the last line before them whose stamp
+    :func:`laser_line_stamp` takes, if any: a log whose last ``kept`` lines of the kind were all damaged
+    gave no stamp, where its plain file gave that line's. Lines that left the window are checked ``kept``
+    at a time, newest first, so a sound log parses one line in ``kept`` and memory stays at 2 x ``kept``
+    lines. A line longer than ``MAX_LINE_CHARS`` (which the reader refuses) is left out."""
     from collections import deque
 
     start = kind.encode("ascii")
     last: deque[bytes] = deque(maxlen=kept)
+    gone: list[bytes] = []  # lines pushed out of ``last``, not yet checked, oldest first
+    fallback: list[bytes] = []  # the newest line checked that gives a stamp
     try:
         with open_bytes(path) as f:
+            whole = True  # the piece read next starts a line
             for line in iter(lambda: f.readline(MAX_LINE_CHARS + 1), b""):
-                if line.startswith(start):
-                    last.append(line)
+                starts, whole = whole, line.endswith(b"\n")
+                if not starts or len(line) > MAX_LINE_CHARS or not line.startswith(start):
+                    continue  # a piece of an overlong line, or another message
+                if len(last) == kept:
+                    gone.append(last[0])
+                    if len(gone) == kept:
+                        good = next((g for g in reversed(gone) if laser_line_stamp(g, kind) is not None), None)
+                        fallback = [good] if good is not None else fallback
+                        gone.clear()
+                last.append(line)
     except READ_ERRORS:
         pass
-    return reversed(last)
+    yield from reversed(last)
+    yield from reversed(gone)
+    yield from fallback
 
 
 def _fields_fit(kind: str, line: str) -> bool:

@@ -69,3 +69,18 @@ def test_a_last_line_longer_than_the_reader_takes_gives_no_stamp(tmp_path, monke
         f.write(text)
     stamps = [r.scan.stamp for r in read_log(path, skip_bad_lines=True)]
     assert read_log(path).last_stamp() == pytest.approx(stamps[-1]) == pytest.approx(10.4)
+
+
+def test_a_compressed_logs_damaged_tail_gives_the_last_sound_lines_stamp(tmp_path):
+    """40 scans, then 20 lines announcing 362 beams with 361 values (more than the 16 a compressed log's
+    pass keeps): the last sound line's stamp, as the plain file's (the compressed one gave None, and
+    another log's relations ran the whole SLAM under --max-scans)."""
+    import gzip
+
+    text = "".join(_flaser(k, 10.0 + 0.1 * k) for k in range(40))
+    text += "".join(_flaser(k, 10.0 + 0.1 * k, announced=362) for k in range(40, 60))
+    (tmp_path / "tail.clf").write_text(text)
+    with gzip.open(tmp_path / "tail.clf.gz", "wt") as f:
+        f.write(text)
+    for name in ("tail.clf", "tail.clf.gz"):
+        assert read_log(tmp_path / name).last_stamp() == pytest.approx(13.9), name
