@@ -84,3 +84,24 @@ def test_a_compressed_logs_damaged_tail_gives_the_last_sound_lines_stamp(tmp_pat
         f.write(text)
     for name in ("tail.clf", "tail.clf.gz"):
         assert read_log(tmp_path / name).last_stamp() == pytest.approx(13.9), name
+
+
+def test_a_backwards_last_stamp_does_not_refuse_the_logs_own_relations(tmp_path):
+    """60 scans stamped 10.0 to 15.9 s, then a 61st stamped 5.0 s (dropped by --skip-bad-lines): the last
+    line's stamp is 5.0 s, the largest 15.9 s. A run cut at 5 scans refused relations at 14-15 s as
+    outside "10.000000 to 10.400000 s"; relations past the whole log are still refused, naming its span."""
+    from itertools import islice
+
+    from experiments.slamrun import _check_relations_span
+    from lms200 import LmsbenchError
+
+    path = tmp_path / "back.clf"
+    path.write_text("".join(_flaser(k, 10.0 + 0.1 * k) for k in range(60)) + _flaser(60, 5.0))
+    reader = read_log(path, skip_bad_lines=True)
+    records = list(islice(iter(reader), 5))
+    own = np.array([[14.0, 15.0, 0.1, 0, 0, 0, 0, 0]])
+    _check_relations_span(own, records, "mid.relations", 5, reader.last_stamp)  # no error
+    assert reader.last_stamp() == pytest.approx(5.0)
+    assert reader.last_stamp(largest=True) == pytest.approx(max(r.scan.stamp for r in read_log(path, skip_bad_lines=True)))
+    with pytest.raises(LmsbenchError, match=r"the whole log's scans 10\.000000 to 15\.900000 s"):
+        _check_relations_span(own + [20.0, 20.0, 0, 0, 0, 0, 0, 0], records, "late.relations", 5, reader.last_stamp)
