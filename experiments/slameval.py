@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from experiments.options import DURATION, MAX_DURATION_S, OneLineParser, number, plain_number
+from experiments.options import DURATION, MAX_DURATION_S, SEED, OneLineParser, number
 from experiments.provenance import write_parquet
 
 MIT_LOG = Path(__file__).resolve().parents[2] / "shared" / "data" / "carmen" / "mit-csail.clf.gz"
@@ -118,15 +118,24 @@ def _md(df: pd.DataFrame) -> str:
     return "\n".join(["| " + " | ".join(head) + " |", "|" + "---|" * len(head)] + ["| " + " | ".join(c) + " |" for c in cells])
 
 
+MAX_SEEDS = 1000  # seeds one evaluation runs at most (each runs a simulated run and its SLAM per rate)
+
+
 def _seeds(text: str) -> list[int]:
-    """An argparse type: a seed or a range LO-HI of seeds (whole numbers, LO <= HI)."""
-    lo, _, hi = text.partition("-")
+    """An argparse type: a seed or a range LO-HI of seeds (whole numbers 0 .. 2**32 - 1, as ``options.SEED``,
+    LO <= HI, at most ``MAX_SEEDS`` of them): `--seeds 0-99999999999` built the list of 1e11 seeds, a
+    MemoryError traceback, and `--seeds 3-` ran seed 3."""
+    lo, dash, hi = text.partition("-")
+    if dash and not hi.strip():
+        raise argparse.ArgumentTypeError(f"must be a seed or a range LO-HI of seeds (0-20), got {text!r}: no HI")
     try:
-        first, last = int(plain_number(lo, integer=True)), int(plain_number(hi or lo, integer=True))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a seed or a range LO-HI of seeds (0-20), got {text!r}") from None
+        first, last = (int(SEED(v)) for v in (lo, hi or lo))
+    except argparse.ArgumentTypeError as exc:
+        raise argparse.ArgumentTypeError(f"must be a seed or a range LO-HI of seeds (0-20), got {text!r}: each {exc}") from None
     if first > last:
         raise argparse.ArgumentTypeError(f"must be a seed or a range LO-HI of seeds with LO <= HI, got {text!r}")
+    if last - first + 1 > MAX_SEEDS:
+        raise argparse.ArgumentTypeError(f"at most {MAX_SEEDS} seeds, got {text!r} ({last - first + 1:,})")
     return list(range(first, last + 1))
 
 
@@ -154,7 +163,8 @@ def main(argv: list[str] | None = None) -> int:
     # `--long 1e-400` read as 0, "no consistency run", and ran without it, exit 0 (lms200.finite.underflow_problem)
     ap = OneLineParser(prog="python -m experiments.slameval", description=" ".join(__doc__.split("\n\n")[0].split()))
     ap.add_argument("--out", type=Path, required=True, help="folder for sim.parquet, mit.parquet, long.parquet, tables.md")
-    ap.add_argument("--seeds", type=_seeds, default="0-20", help="simulated office runs, a seed or a range LO-HI (default 0-20)")
+    ap.add_argument("--seeds", type=_seeds, default="0-20",
+                    help=f"simulated office runs, a seed or a range LO-HI, at most {MAX_SEEDS} (default 0-20)")
     ap.add_argument("--duration", type=DURATION, default=90.0, help="duration (s) of each simulated run (default 90)")
     ap.add_argument("--mit", type=Path, default=MIT_LOG,
                     help="MIT CSAIL log (default: shared/data/carmen/mit-csail.clf.gz beside the checkout; skipped where absent)")

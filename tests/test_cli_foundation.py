@@ -182,6 +182,10 @@ def test_the_research_scripts_docs_name_answer_help_without_running(capsys: pyte
     (["--long", "1e-3"], "argument --long: must be a finite number >= 0.1 and <= 3600 s, got '1e-3' (or 0: no "
                          "consistency run)"),
     (["--seeds", "5-2"], "argument --seeds: must be a seed or a range LO-HI of seeds with LO <= HI, got '5-2'"),
+    (["--seeds", "0-99999999999"], "argument --seeds: must be a seed or a range LO-HI of seeds (0-20), got '0-99999999999': "
+                                   "each must be a whole number >= 0 and <= 4294967295"),
+    (["--seeds", "0-1000"], "argument --seeds: at most 1000 seeds, got '0-1000' (1,001)"),
+    (["--seeds", "3-"], "argument --seeds: must be a seed or a range LO-HI of seeds (0-20), got '3-': no HI"),
 ])
 def test_the_slam_evaluations_options_are_checked_as_the_commands_are(tmp_path: Path, capsys: pytest.CaptureFixture[str],
                                                                       given: list[str], message: str) -> None:
