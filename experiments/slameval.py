@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from experiments.options import DURATION, MAX_DURATION_S, OneLineParser, number, plain_number
+from experiments.options import DURATION, MAX_DURATION_S, SEED, OneLineParser, check_out, number, path_arg
 from experiments.provenance import write_parquet
 
 MIT_LOG = Path(__file__).resolve().parents[2] / "shared" / "data" / "carmen" / "mit-csail.clf.gz"
@@ -118,15 +118,24 @@ def _md(df: pd.DataFrame) -> str:
     return "\n".join(["| " + " | ".join(head) + " |", "|" + "---|" * len(head)] + ["| " + " | ".join(c) + " |" for c in cells])
 
 
+MAX_SEEDS = 1000  # seeds one evaluation runs at most (each runs a simulated run and its SLAM per rate)
+
+
 def _seeds(text: str) -> list[int]:
-    """An argparse type: a seed or a range LO-HI of seeds (whole numbers, LO <= HI)."""
-    lo, _, hi = text.partition("-")
+    """An argparse type: a seed or a range LO-HI of seeds (whole numbers 0 .. 2**32 - 1, as ``options.SEED``,
+    LO <= HI, at most ``MAX_SEEDS`` of them): `--seeds 0-99999999999` built the list of 1e11 seeds, a
+    MemoryError traceback, and `--seeds 3-` ran seed 3."""
+    lo, dash, hi = text.partition("-")
+    if dash and not hi.strip():
+        raise argparse.ArgumentTypeError(f"must be a seed or a range LO-HI of seeds (0-20), got {text!r}: no HI")
     try:
-        first, last = int(plain_number(lo, integer=True)), int(plain_number(hi or lo, integer=True))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"must be a seed or a range LO-HI of seeds (0-20), got {text!r}") from None
+        first, last = (int(SEED(v)) for v in (lo, hi or lo))
+    except argparse.ArgumentTypeError as exc:
+        raise argparse.ArgumentTypeError(f"must be a seed or a range LO-HI of seeds (0-20), got {text!r}: each {exc}") from None
     if first > last:
         raise argparse.ArgumentTypeError(f"must be a seed or a range LO-HI of seeds with LO <= HI, got {text!r}")
+    if last - first + 1 > MAX_SEEDS:
+        raise argparse.ArgumentTypeError(f"at most {MAX_SEEDS} seeds, got {text!r} ({last - first + 1:,})")
     return list(range(first, last + 1))
 
 
@@ -148,18 +157,52 @@ def _long(text: str) -> float:
 _long.__name__ = "number"
 
 
+RATES_HZ = (37.5, 5.0)  # the simulated runs' rates: the LMS200's and decimated
+OUTPUTS = ("sim.parquet", "mit.parquet", "long.parquet", "tables.md")  # what --out receives
+
+
+def min_duration(rates: tuple[float, ...] = RATES_HZ) -> float:
+    """The shortest simulated run (s, rounded up to 0.01 s) that keeps two scans at each of ``rates``, the
+    fewest the ATE scores: `--duration 0.2` kept one at 5 scans/s and failed after the runs at 37.5 with
+    a traceback ("ate: fewer than 2 estimated poses")."""
+    import math
+
+    from sim.records import scan_stamps
+    from sim.sensor import SensorConfig
+
+    sensor = SensorConfig()
+    last_beam = float(sensor.beam_time_offsets.max())
+    need = max(float(scan_stamps(sensor, MAX_DURATION_S, rate)[1]) + last_beam for rate in rates)
+    return math.ceil(need * 100 - 1e-6) / 100
+
+
 def main(argv: list[str] | None = None) -> int:
     # the docstring's first paragraph (its first line alone stopped mid-sentence: "..., a long")
     # a bad value is one line, exit 2 (options.OneLineParser); the durations read as options.number reads them:
     # `--long 1e-400` read as 0, "no consistency run", and ran without it, exit 0 (lms200.finite.underflow_problem)
+    from lms200 import LmsbenchError
+
     ap = OneLineParser(prog="python -m experiments.slameval", description=" ".join(__doc__.split("\n\n")[0].split()))
-    ap.add_argument("--out", type=Path, required=True, help="folder for sim.parquet, mit.parquet, long.parquet, tables.md")
-    ap.add_argument("--seeds", type=_seeds, default="0-20", help="simulated office runs, a seed or a range LO-HI (default 0-20)")
-    ap.add_argument("--duration", type=DURATION, default=90.0, help="duration (s) of each simulated run (default 90)")
+    ap.add_argument("--out", type=path_arg, required=True, help="folder for sim.parquet, mit.parquet, long.parquet, tables.md")
+    ap.add_argument("--seeds", type=_seeds, default="0-20",
+                    help=f"simulated office runs, a seed or a range LO-HI, at most {MAX_SEEDS} (default 0-20)")
+    shortest = min_duration()
+    ap.add_argument("--duration", type=number(shortest, MAX_DURATION_S, unit="s"), default=90.0,
+                    help=f"duration (s) of each simulated run, at least {shortest:g}: two scans at 5 scans/s (default 90)")
     ap.add_argument("--mit", type=Path, default=MIT_LOG,
                     help="MIT CSAIL log (default: shared/data/carmen/mit-csail.clf.gz beside the checkout; skipped where absent)")
     ap.add_argument("--long", type=_long, default=900.0, help="duration (s) of the consistency run (default 900; 0: none)")
     args = ap.parse_args(argv)
+    try:  # a user error is one line, exit 2, as the CLI's (an existing file as --out was a FileExistsError traceback)
+        check_out(args.out, OUTPUTS)
+        return _run(args)
+    except LmsbenchError as exc:
+        ap.error(str(exc))
+    return 2
+
+
+def _run(args: argparse.Namespace) -> int:
+    """The evaluation of the parsed options: the tables, written into ``args.out``."""
     args.out.mkdir(parents=True, exist_ok=True)
     md = []
     if args.mit.exists():
@@ -167,10 +210,10 @@ def main(argv: list[str] | None = None) -> int:
         write_parquet(mit, args.out / "mit.parquet")
         md += [_md(mit), ""]
     if args.long > 0:
-        lg = long_run(0, args.long, 37.5)
+        lg = long_run(0, args.long, RATES_HZ[0])
         write_parquet(lg, args.out / "long.parquet")
         md += [_md(lg), ""]
-    sim = sim_rows(args.seeds, [37.5, 5.0], args.duration, ["default"])
+    sim = sim_rows(args.seeds, list(RATES_HZ), args.duration, ["default"])
     write_parquet(sim, args.out / "sim.parquet")
     wide = sim.pivot_table(index="seed", columns="rate_hz", values=["ate_rmse_m", "cpu_scans_per_s"])
     wide.columns = [f"{v} @ {r:g} Hz" for v, r in wide.columns]

@@ -346,16 +346,17 @@ def _check_truth_span(truth: np.ndarray, records: list[Record], where: str) -> N
 
 
 def _check_relations_span(relations: np.ndarray, records: list[Record], where: str, cut: int | None,
-                          log_end: Callable[[], float | None] | None = None) -> None:
+                          log_end: Callable[..., float | None] | None = None) -> None:
     """LmsbenchError naming the relations file, before any work, when none of its relations lies within
     the time span of the scans to run on (both stamps: the relations error scores no other), as
     ``_check_truth_span`` does for ground truth: another log's relations (MIT CSAIL's given with the
     Intel log) ran the whole SLAM, warned "the relations error covers 0 of the file's 1172 relations"
     and wrote metrics.json without a relations score, exit 0. ``cut``: the --max-scans that stopped
     the read early; then the span is the whole log's, from its first scan read to its last stamp
-    (``log_end``: the reader's ``last_stamp``, asked only here), so that relations past the cut but
-    within the log are left to the run's note and warning, and relations outside the whole log are
-    refused as without the cut (they passed whenever they lay after the cut: another log's relations
+    (``log_end``: the reader's ``last_stamp``, asked only here; before refusing, ``log_end(largest=True)``,
+    as the last line's stamp is not the largest where the stamps go back at the log's end), so that
+    relations past the cut but within the log are left to the run's note and warning, and relations
+    outside the whole log are refused as without the cut (they passed whenever they lay after the cut: another log's relations
     ran the whole SLAM under --max-scans, exit 0). Where the log's last stamp cannot be told
     (``log_end`` None or giving None), relations after the last scan read pass as the log's own, perhaps."""
     stamps = np.array([r.scan.stamp for r in records])
@@ -369,6 +370,11 @@ def _check_relations_span(relations: np.ndarray, records: list[Record], where: s
         return
     first, last = float(relations[:, :2].min()), float(relations[:, :2].max())
     end = log_end() if cut is not None and log_end is not None and last > hi else None
+    if end is not None and not within(max(end, hi)):
+        # the last line's stamp is no bound of the log's stamps where they go back at its end (a 61st line stamped
+        # before the 60 above it, which --skip-bad-lines drops, refused the log's own relations as outside
+        # "10.000000 to 10.400000 s"): refused only against the largest stamp, one pass over the log
+        end = log_end(largest=True)
     if cut is not None and last > hi and (end is None or within(max(end, hi))):  # past the cut: the log's own (the run warns)
         return
     if cut is None:

@@ -1711,10 +1711,11 @@ class BagReader:
         finally:
             reader.close()
 
-    def last_stamp(self) -> float | None:
+    def last_stamp(self, largest: bool = False) -> float | None:
         """The latest header stamp (s) of the bag's scans on the topic read, read from the messages' bytes
         where the bag's definitions put it where ROS does (:meth:`_scan_stamps`), without reading its
-        records; None where the bag cannot be read so or holds no scan."""
+        records; None where the bag cannot be read so or holds no scan. It is the largest already
+        (``largest``, as the CARMEN reader's, changes nothing)."""
         try:
             reader = self._open()
             try:

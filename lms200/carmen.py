@@ -359,13 +359,16 @@ class CarmenReader:
             pass
         return counts
 
-    def last_stamp(self) -> float | None:
+    def last_stamp(self, largest: bool = False) -> float | None:
         """The ipc_timestamp (s) of the log's last laser line of the kind read (``stats.laser`` after a
         pass, else ``topic`` or the default kind) whose fields add up to its counts, found without
         reading the log's records: a plain file is read from its end back to that line; a compressed
         one is decompressed in one pass, each line only looked at for its message name (MIT CSAIL's
         872 KB gzip: 0.014 s, where reading its records takes 0.28 s). None where there is no such line
-        (or the kind cannot be told); where the stream is damaged, the last such line before the damage."""
+        (or the kind cannot be told); where the stream is damaged, the last such line before the damage.
+        The last line's stamp is not the log's largest where the stamps go back at its end (lines the
+        reader refuses, or drops under ``skip_bad_lines``); ``largest``: the largest stamp of all such
+        lines instead, in one pass that parses each line of the kind (MIT CSAIL's gzip: 35 ms)."""
         kind = self.stats.laser or self.topic
         if kind is None:
             try:
@@ -374,6 +377,8 @@ class CarmenReader:
                 return None
         if kind is None:
             return None
+        if largest:
+            return _largest_stamp(self.path, kind)
         with open(self.path, "rb") as f:
             packed = compression(f.read(6)) is not None
         lines = _compressed_lines_of(self.path, kind) if packed else _lines_from_end(self.path)
@@ -888,42 +893,85 @@ LAST_LINES_BLOCK = 1 << 16  # bytes read at a time from a plain log's end (:func
 
 
 def _lines_from_end(path: Path) -> Iterator[bytes]:
-    """A plain file's lines, its last first (a line longer than ``MAX_LINE_CHARS``, which the reader
-    refuses, is left out)."""
+    """A plain file's lines, its last first, without their newlines (a line the reader refuses as
+    longer than ``MAX_LINE_CHARS``, its newline counted, is left out)."""
     with open(path, "rb") as f:
         pos = f.seek(0, os.SEEK_END)
         rest, long = b"", False  # the start of the line that ends the block read last; it runs on past MAX_LINE_CHARS
+        ended = False  # the line yielded next ends in a newline (all but the file's last piece)
+
+        def fits(line: bytes) -> bool:  # a piece of up to MAX_LINE_CHARS + a block: the reader reads a line whole
+            return len(line) + ended <= MAX_LINE_CHARS
+
         while pos > 0:
             step = min(LAST_LINES_BLOCK, pos)
             pos -= step
             f.seek(pos)
             pieces = (f.read(step) + rest).split(b"\n")
             for line in reversed(pieces[1:]):
-                if not long:
+                if not long and fits(line):
                     yield line
-                long = False
+                long, ended = False, True
             rest = pieces[0]
             if len(rest) > MAX_LINE_CHARS:
                 rest, long = b"", True
-        if not long:
+        if not long and fits(rest):
             yield rest
 
 
 def _compressed_lines_of(path: Path, kind: str, kept: int = 16) -> Iterator[bytes]:
     """The last ``kept`` lines of a compressed log that start with ``kind``, its last first, from one
-    decompressing pass (damage ends the pass where it is)."""
+    decompressing pass (damage ends the pass where it is), then the last line before them whose stamp
+    :func:`laser_line_stamp` takes, if any: a log whose last ``kept`` lines of the kind were all damaged
+    gave no stamp, where its plain file gave that line's. Lines that left the window are checked ``kept``
+    at a time, newest first, so a sound log parses one line in ``kept`` and memory stays at 2 x ``kept``
+    lines. A line longer than ``MAX_LINE_CHARS`` (which the reader refuses) is left out."""
     from collections import deque
 
     start = kind.encode("ascii")
     last: deque[bytes] = deque(maxlen=kept)
+    gone: list[bytes] = []  # lines pushed out of ``last``, not yet checked, oldest first
+    fallback: list[bytes] = []  # the newest line checked that gives a stamp
     try:
         with open_bytes(path) as f:
+            whole = True  # the piece read next starts a line
             for line in iter(lambda: f.readline(MAX_LINE_CHARS + 1), b""):
-                if line.startswith(start):
-                    last.append(line)
+                starts, whole = whole, line.endswith(b"\n")
+                if not starts or len(line) > MAX_LINE_CHARS or not line.startswith(start):
+                    continue  # a piece of an overlong line, or another message
+                if len(last) == kept:
+                    gone.append(last[0])
+                    if len(gone) == kept:
+                        good = next((g for g in reversed(gone) if laser_line_stamp(g, kind) is not None), None)
+                        fallback = [good] if good is not None else fallback
+                        gone.clear()
+                last.append(line)
     except READ_ERRORS:
         pass
-    return reversed(last)
+    yield from reversed(last)
+    yield from reversed(gone)
+    yield from fallback
+
+
+def _largest_stamp(path: Path, kind: str) -> float | None:
+    """The largest stamp :func:`laser_line_stamp` takes among all the log's lines of ``kind``, in one pass
+    (plain or compressed; damage ends it where it is): an upper bound of the stamps of the scans the
+    reader gives, which :func:`_lines_from_end`'s last line is not where the stamps go back at the end
+    (a line the reader drops under ``skip_bad_lines``). MIT CSAIL's gzip: 35 ms."""
+    start = kind.encode("ascii")
+    largest: float | None = None
+    try:
+        with open_bytes(path) as f:
+            whole = True
+            for line in iter(lambda: f.readline(MAX_LINE_CHARS + 1), b""):
+                starts, whole = whole, line.endswith(b"\n")
+                if starts and len(line) <= MAX_LINE_CHARS and line.startswith(start):
+                    stamp = laser_line_stamp(line, kind)
+                    if stamp is not None and (largest is None or stamp > largest):
+                        largest = stamp
+    except READ_ERRORS:
+        pass
+    return largest
 
 
 def _fields_fit(kind: str, line: str) -> bool:

@@ -177,24 +177,57 @@ def test_the_research_scripts_docs_name_answer_help_without_running(capsys: pyte
 @pytest.mark.parametrize("given, message", [
     (["--long", "1e-400"], "argument --long: must be a finite number >= 0 and <= 3600 s, got '1e-400': 1e-400 rounds "
                            "to 0 in float64"),
-    (["--duration", "1e-400"], "argument --duration: must be a finite number >= 0.1 and <= 3600 s, got '1e-400': "
+    (["--duration", "1e-400"], "argument --duration: must be a finite number >= {shortest} and <= 3600 s, got '1e-400': "
                                "1e-400 rounds to 0"),
+    (["--duration", "0.2"], "argument --duration: must be a finite number >= {shortest} and <= 3600 s, got '0.2'"),
     (["--long", "1e-3"], "argument --long: must be a finite number >= 0.1 and <= 3600 s, got '1e-3' (or 0: no "
                          "consistency run)"),
     (["--seeds", "5-2"], "argument --seeds: must be a seed or a range LO-HI of seeds with LO <= HI, got '5-2'"),
+    (["--seeds", "0-99999999999"], "argument --seeds: must be a seed or a range LO-HI of seeds (0-20), got '0-99999999999': "
+                                   "each must be a whole number >= 0 and <= 4294967295"),
+    (["--seeds", "0-1000"], "argument --seeds: at most 1000 seeds, got '0-1000' (1,001)"),
+    (["--seeds", "3-"], "argument --seeds: must be a seed or a range LO-HI of seeds (0-20), got '3-': no HI"),
 ])
 def test_the_slam_evaluations_options_are_checked_as_the_commands_are(tmp_path: Path, capsys: pytest.CaptureFixture[str],
                                                                       given: list[str], message: str) -> None:
     """`python -m experiments.slameval --long 1e-400` read 0 ("no consistency run") and ran without it, exit 0;
-    `--duration 1e-400` and `--long 1e-3` failed inside the simulator (a traceback). One line, exit 2, nothing run."""
+    `--duration 1e-400` and `--long 1e-3` failed inside the simulator (a traceback), `--duration 0.2` after its
+    runs ("ate: fewer than 2 estimated poses"); `--seeds 0-99999999999` was a MemoryError, `--seeds 3-` ran seed 3,
+    One line, exit 2, nothing run."""
     from experiments import slameval
 
     with pytest.raises(SystemExit) as stop:
         slameval.main(["--out", str(tmp_path / "o"), *given])
     assert stop.value.code == 2
     err = capsys.readouterr().err
+    message = message.format(shortest=f"{slameval.min_duration():g}")
     assert err.startswith(f"python -m experiments.slameval: error: {message}") and err.count("\n") == 1, err
     assert not (tmp_path / "o").exists()
+
+
+def test_the_slam_evaluations_shortest_duration_keeps_two_scans_at_each_rate(tmp_path: Path,
+                                                                           capsys: pytest.CaptureFixture[str]) -> None:
+    """--duration's minimum is the shortest run that keeps two scans at each rate (the ATE's fewest), as the
+    simulator keeps them; an existing file as --out was a FileExistsError traceback, `--out ""` wrote into
+    the current folder: one line, exit 2."""
+    from experiments import slameval
+    from sim import simulate_records
+
+    shortest = slameval.min_duration()
+    for rate in slameval.RATES_HZ:
+        assert len(simulate_records("office", seed=0, duration=shortest, rate_hz=rate)) >= 2
+    assert len(simulate_records("office", seed=0, duration=shortest - 0.01, rate_hz=min(slameval.RATES_HZ))) == 1
+    (tmp_path / "f").write_text("mine\n")
+    with pytest.raises(SystemExit) as stop:
+        slameval.main(["--out", str(tmp_path / "f"), "--seeds", "0", "--long", "0", "--mit", str(tmp_path / "none")])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"python -m experiments.slameval: error: --out {tmp_path / 'f'}: exists and is not a folder"), err
+    assert (tmp_path / "f").read_text() == "mine\n"
+    with pytest.raises(SystemExit) as stop:  # it wrote into the current folder
+        slameval.main(["--out", "", "--seeds", "0"])
+    assert stop.value.code == 2
+    assert capsys.readouterr().err.startswith("python -m experiments.slameval: error: argument --out: empty path ''")
 
 
 def test_a_missing_input_names_the_file_it_was_likely_meant_to_be(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,

@@ -13,7 +13,7 @@ import pytest
 import yaml
 
 from experiments.cli import main
-from experiments.options import BENCH_OUTPUTS, BENCH_OWNER, SIM2REAL_OUTPUTS, SIM2REAL_OWNER, SIM2REAL_UNFINISHED, SWEEP_OUTPUTS, SWEEP_OWNER, OutTree
+from experiments.options import BENCH_OUTPUTS, BENCH_OWNER, DEMO_SWEEP, SIM2REAL_OUTPUTS, SIM2REAL_OWNER, SIM2REAL_UNFINISHED, SWEEP_OUTPUTS, SWEEP_OWNER, OutTree
 
 
 @pytest.fixture(scope="module")
@@ -444,7 +444,7 @@ def test_a_demo_run_again_leaves_no_figures_record_beside_its_own_figures(tmp_pa
     for name in earlier:  # an earlier demo's (with its sweep, sim2real and SLAM), as its report.md tells them
         (demo / name).parent.mkdir(parents=True, exist_ok=True)
         (demo / name).write_bytes(b"earlier")
-    _finished_sweep(demo / "sweeps" / "demo_k_vs_noise", experiments.demo.DEMO_SWEEP)  # its cells by their keys
+    _finished_sweep(demo / "sweeps" / "demo_k_vs_noise", DEMO_SWEEP)  # its cells by their keys
     # a user's files of names the demo's patterns matched (figures/sweep_demo_k_vs_noise_*, cells/*.parquet) stay:
     # they were removed with the earlier demo's (round 11); the earlier demo's own are named exactly
     mine = ["figures/sweep_demo_k_vs_noise_notes.csv", "sweeps/demo_k_vs_noise/cells/mine.parquet"]

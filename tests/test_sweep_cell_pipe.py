@@ -73,3 +73,15 @@ def test_a_sweep_folder_whose_name_is_not_utf8_resumes_its_cells_and_its_tables_
     assert read_parquet(root / "results.parquet")["cell"].tolist() == ["aaaa"]
     write_parquet(pd.DataFrame({"y": [2.0]}), root / "t.parquet")
     assert read_parquet(root / "t.parquet")["y"].tolist() == [2.0]
+
+
+def test_a_file_named_cells_is_not_a_folder_not_a_permission_error(tmp_path: Path) -> None:
+    """A regular file where the sweep's cells/ folder goes, read without creating the store (a sweep's
+    checks): it was said "cannot be read (permission denied)"."""
+    import pytest
+
+    from lms200.errors import LmsbenchError
+
+    (tmp_path / "cells").write_text("mine\n")
+    with pytest.raises(LmsbenchError, match=r"cells: is not a folder"):
+        CellStore(tmp_path, create=False).done()

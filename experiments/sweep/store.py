@@ -71,6 +71,9 @@ class CellStore:
         edited: list[str] = []
         if not self.cells.exists() and not self.cells.is_symlink():  # a new sweep (a store not created)
             return keys
+        if not self.cells.is_dir():  # a file there was said "cannot be read (permission denied)"
+            raise LmsbenchError(f"{self.cells}: is not a folder (a file, or a link to none, where the sweep keeps its "
+                                "finished cells); move it out of the sweep folder to resume the sweep")
         if not os.access(self.cells, os.R_OK | os.X_OK):  # "sw/cells: permission denied" named no reason
             raise LmsbenchError(f"{self.cells}: the sweep's folder of finished cells cannot be read (permission "
                                 "denied); make it readable (chmod u+rx) to resume the sweep")
