@@ -415,8 +415,11 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig(), max_s
     holds more than ``MAX_SLAM_SCANS``.
 
     The first ``lms200.units.UNITS_SCANS`` (50) scans are looked at for ranges in millimetres as
-    they come (none read ahead; a log reader given as ``records`` looks itself): one
-    ``lms200.units.RangeUnitsWarning`` where they look so (every beam a no return).
+    they come (none read ahead): one ``lms200.units.RangeUnitsWarning`` where they look so (every
+    beam a no return). A log reader given as ``records`` itself (``read_log(...)``) looks at them in
+    its own pass, and this check is left out; a list or slice of a reader's records is looked at
+    here as well, so a log in millimetres is then said twice (the reader's text, naming the log,
+    and this one, naming ``records``).
 
     Returns:
         SlamResult with one pose per record, stamped with the record's ``scan.stamp``.
@@ -435,7 +438,7 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig(), max_s
         iter(records)
     except TypeError:
         raise SlamInputError(f"records: must be an iterable of lms200.Record, got {type(records).__name__}") from None
-    watched = reader_watches(records)  # a log reader's pass looks at its first scans' units itself
+    watched = reader_watches(records)  # a bare log reader's pass looks at its first scans' units itself
     # an int past sys.maxsize is no count islice takes (a raw ValueError); no source holds that many
     capped: Iterable[Any] = (Capped(records, "records") if max_scans is None
                              else itertools.islice(records, min(int(max_scans), sys.maxsize)))
