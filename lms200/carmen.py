@@ -527,7 +527,7 @@ class CarmenReader:
         return raw
 
     def __iter__(self) -> Iterator[Record]:
-        """The log's records, one pass; its first scans checked for ranges in millimetres (``lms200.units``).; what they
+        """The log's records, one pass; its first scans checked for ranges in millimetres (``lms200.units``); what they
         showed is ``units`` (an ``lms200.units.UnitsTally`` of the pass's first UNITS_SCANS scans)."""
         from .units import UnitsTally, units_watched
 
@@ -867,7 +867,8 @@ def _logger_at(words: list[str], fixed: int) -> int:
 def laser_line_stamp(line: bytes, kind: str) -> float | None:
     """The ipc_timestamp (s) of a laser line of ``kind`` whose fields add up to its counts (as
     :func:`_fields_fit` tells them, its numbers up to the stamp numbers), None for any other line or
-    a stamp no reader takes (:func:`stamp_problem`)."""
+    a stamp no reader takes (:func:`stamp_problem`). Leading whitespace is passed over, as the reader does."""
+    line = line.lstrip()
     if not line.startswith(kind.encode("ascii")):
         return None
     words = line.decode("ascii", "replace").split()
@@ -937,7 +938,7 @@ def _compressed_lines_of(path: Path, kind: str, kept: int = 16) -> Iterator[byte
             whole = True  # the piece read next starts a line
             for line in iter(lambda: f.readline(MAX_LINE_CHARS + 1), b""):
                 starts, whole = whole, line.endswith(b"\n")
-                if not starts or len(line) > MAX_LINE_CHARS or not line.startswith(start):
+                if not starts or len(line) > MAX_LINE_CHARS or not line.lstrip().startswith(start):
                     continue  # a piece of an overlong line, or another message
                 if len(last) == kept:
                     gone.append(last[0])
@@ -965,7 +966,7 @@ def _largest_stamp(path: Path, kind: str) -> float | None:
             whole = True
             for line in iter(lambda: f.readline(MAX_LINE_CHARS + 1), b""):
                 starts, whole = whole, line.endswith(b"\n")
-                if starts and len(line) <= MAX_LINE_CHARS and line.startswith(start):
+                if starts and len(line) <= MAX_LINE_CHARS and line.lstrip().startswith(start):
                     stamp = laser_line_stamp(line, kind)
                     if stamp is not None and (largest is None or stamp > largest):
                         largest = stamp

@@ -105,3 +105,20 @@ def test_a_backwards_last_stamp_does_not_refuse_the_logs_own_relations(tmp_path)
     assert reader.last_stamp(largest=True) == pytest.approx(max(r.scan.stamp for r in read_log(path, skip_bad_lines=True)))
     with pytest.raises(LmsbenchError, match=r"the whole log's scans 10\.000000 to 15\.900000 s"):
         _check_relations_span(own + [20.0, 20.0, 0, 0, 0, 0, 0, 0], records, "late.relations", 5, reader.last_stamp)
+
+
+@pytest.mark.parametrize("name", ["indent.clf", "indent.clf.gz"])
+def test_indented_laser_lines_give_their_stamps(tmp_path, name):
+    """Laser lines after leading whitespace, which the reader reads: the last stamp and the largest are
+    theirs (16.9 s), not the last unindented line's (15.9 s), which refused the log's own relations at
+    16.5 s under --max-scans."""
+    import gzip
+
+    text = "".join(_flaser(k, 10.0 + 0.1 * k) for k in range(60)) + "".join(
+        " " + _flaser(k, 10.0 + 0.1 * k) for k in range(60, 70))
+    path = tmp_path / name
+    path.write_bytes(gzip.compress(text.encode()) if name.endswith(".gz") else text.encode())
+    reader = read_log(path)
+    assert [r.scan.stamp for r in reader][-1] == pytest.approx(16.9)
+    assert reader.last_stamp() == pytest.approx(16.9)
+    assert reader.last_stamp(largest=True) == pytest.approx(16.9)
