@@ -1460,11 +1460,6 @@ def check_study_tables(folder: str | os.PathLike) -> Path:
     return p
 
 
-def check_sweep_results(folder: str | os.PathLike) -> Path:
-    """A sweep folder with results.parquet holding at least one successful cell (:func:`read_sweep_results`)."""
-    return read_sweep_results(folder)[0]
-
-
 def read_sweep_results(folder: str | os.PathLike) -> tuple[Path, Any]:
     """A sweep folder with results.parquet holding at least one successful cell, and that table (a
     pandas DataFrame) as read for the checks: ``figures --sweep`` draws from it (it read the table again for

@@ -1646,7 +1646,7 @@ class BagReader:
             self.stats.stopped = f"{where}: {reason}"
 
     def __iter__(self) -> Iterator[Record]:
-        """The bag's records, one pass; its first scans checked for ranges in millimetres (``lms200.units``).; what they
+        """The bag's records, one pass; its first scans checked for ranges in millimetres (``lms200.units``); what they
         showed is ``units`` (an ``lms200.units.UnitsTally`` of the pass's first UNITS_SCANS scans)."""
         from .units import UnitsTally, units_watched
 

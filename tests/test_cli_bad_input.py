@@ -1559,7 +1559,7 @@ def test_a_sweeps_own_big_sweep_yaml_is_read_for_its_plots(tmp_path):
     one grid value a line, is larger (1.1 MB here: 50,000 values of 17 digits; the most cells,
     MAX_CELLS, write more) and `figures --sweep DIR` still reads it. (Half the lines of 100,000
     short values, for the same size: the YAML parser's time goes by the line, 14 s for those.)"""
-    from experiments.options import check_sweep_results
+    from experiments.options import read_sweep_results
     from experiments.sweep.runner import spec_record
     from experiments.sweep.spec import SweepSpec
     from lms200.yamlio import MAX_YAML_BYTES
@@ -1571,7 +1571,7 @@ def test_a_sweeps_own_big_sweep_yaml_is_read_for_its_plots(tmp_path):
     n = len(spec.cells())  # a finished sweep's table: one row a cell (fewer is a sweep that did not finish)
     pd.DataFrame({"extractor.ad_tau": spec.grid["extractor.ad_tau"], "status": ["ok"] * n, "error": [""] * n,
                   "cell": [str(i) for i in range(n)], "seed": [0] * n}).to_parquet(tmp_path / "results.parquet")
-    assert check_sweep_results(tmp_path) == tmp_path
+    assert read_sweep_results(tmp_path)[0] == tmp_path
 
 
 @pytest.mark.parametrize("with_out", [True, False])

@@ -1228,13 +1228,13 @@ def test_a_finished_sweeps_table_is_taken_as_its_sweep_yamls_cells(tmp_path: Pat
     """figures --sweep checks that the table's rows are the sweep.yaml's cells; values the table stores
     otherwise than the sweep.yaml (text, a bool as 1, a rounded whole number) made a finished sweep
     refused as edited (review)."""
-    from experiments.options import check_sweep_results
+    from experiments.options import read_sweep_results
 
     spec = SweepSpec.from_dict({"name": "kept", "kind": f"{Path(__file__).stem}:echo", **extra})
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # repeated random draws
         run_sweep(spec, tmp_path / "s", "inprocess", progress=False)
-    assert check_sweep_results(tmp_path / "s") == tmp_path / "s"
+    assert read_sweep_results(tmp_path / "s")[0] == tmp_path / "s"
 
 
 @pytest.mark.parametrize("options", [["--workers", "3", "--inprocess"], ["--scheduler", "bogus:x"]])
