@@ -34,6 +34,7 @@ from .errors import InputError, LmsbenchError, LogNotFoundError, one_line
 from . import laser_geometry
 from .records import Pose2D, Record, SkipLog, pose_problem, stamp_problem
 from .scan import Scan, snap_float32_angle
+from .units import WatchedPasses
 from .tum import MAX_TILT_DEG, quaternion_to_yaw, tilt_deg
 from .timing import lms200_shaped, mirror_time_increment, scan_period, smallest_range
 
@@ -1526,7 +1527,7 @@ def _recovering_reader(path: Path) -> Any:  # noqa: ANN401 - a rosbags rosbag1 R
     return reader
 
 
-class BagReader:
+class BagReader(WatchedPasses):
     """Iterate the LaserScans of a ROS 1 or ROS 2 bag as Records (iterable several times).
 
     Args:
@@ -1542,9 +1543,6 @@ class BagReader:
             ``topic``, a missing topic, or a message that cannot be read (naming topic and index).
     """
 
-    #: each pass looks at its first scans for ranges in millimetres (``lms200.units.reader_watches``)
-    WATCHES_UNITS = True
-
     def __init__(self, path: str | Path, topic: str | None = None, skip_bad_lines: bool = False,
                  range_max: float | None = None) -> None:
         self.path = Path(path)
@@ -1554,9 +1552,6 @@ class BagReader:
         self.range_max = range_max
         self.skip_bad_lines = skip_bad_lines
         self.stats = BagReadStats()
-        from .units import UnitsTally
-
-        self.units = UnitsTally()  # the units seen by the last pass (:meth:`__iter__`)
         self._warned = False  # the warning of a bag never closed: once
 
     def _open(self):  # noqa: ANN202 - rosbags' AnyReader
@@ -1644,14 +1639,6 @@ class BagReader:
         self.stats.skip(index, f"{where}: {reason}")
         if fatal:
             self.stats.stopped = f"{where}: {reason}"
-
-    def __iter__(self) -> Iterator[Record]:
-        """The bag's records, one pass; its first scans checked for ranges in millimetres (``lms200.units``); what they
-        showed is ``units`` (an ``lms200.units.UnitsTally`` of the pass's first UNITS_SCANS scans)."""
-        from .units import UnitsTally, units_watched
-
-        self.units = UnitsTally()  # this pass's (the last pass's once it ends)
-        return units_watched(self._pass(), str(self.path), self.units)
 
     def _pass(self) -> Iterator[Record]:
         self.stats = stats = BagReadStats(laser=self.topic)

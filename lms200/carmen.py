@@ -84,6 +84,7 @@ from .finite import fixed, is_one_of
 from .laser_geometry import LaserGeometry
 from .records import MAX_COORD_M, MAX_HEADING_RAD, Pose2D, Record, SkipLog, pose_problem, stamp_problem  # noqa: F401 - carmen's names too
 from .scan import Scan, snap_angle, valid_ranges
+from .units import WatchedPasses
 
 UNITS_PARAM = "lmsbench_range_units"
 ODOMETRY_PARAM = "lmsbench_odometry"  # "absent": the pose fields of the scans that follow are not odometry
@@ -288,7 +289,7 @@ def no_scan_read(stopped: str) -> str:
     return f"no scan read: the pass stopped at {stopped}"
 
 
-class CarmenReader:
+class CarmenReader(WatchedPasses):
     """Iterate a CARMEN log's laser messages as Records; iterable several times.
 
     Args:
@@ -311,9 +312,6 @@ class CarmenReader:
         InputError: a ``topic`` that is no laser kind (the message lists the log's laser lines).
     """
 
-    #: each pass looks at its first scans for ranges in millimetres (``lms200.units.reader_watches``)
-    WATCHES_UNITS = True
-
     def __init__(self, path: str | Path, skip_bad_lines: bool = False, topic: str | None = None,
                  geometry: LaserGeometry | None = None) -> None:
         self.path = Path(path)
@@ -334,9 +332,6 @@ class CarmenReader:
         self.topic = topic
         self.geometry = geometry or LaserGeometry()
         self.stats = ReadStats()
-        from .units import UnitsTally
-
-        self.units = UnitsTally()  # the units seen by the last pass (:meth:`__iter__`)
         self._held: list[_Held] = []  # the pass's lines held until their tail is told (:meth:`_read`)
 
     def _laser_counts(self) -> dict[str, int]:
@@ -525,14 +520,6 @@ class CarmenReader:
             raise LogFormatError(self.path, None, f"not a CARMEN log: none of its {starts:,} lines (comments aside) "
                                                   f"{names}")
         return raw
-
-    def __iter__(self) -> Iterator[Record]:
-        """The log's records, one pass; its first scans checked for ranges in millimetres (``lms200.units``); what they
-        showed is ``units`` (an ``lms200.units.UnitsTally`` of the pass's first UNITS_SCANS scans)."""
-        from .units import UnitsTally, units_watched
-
-        self.units = UnitsTally()  # this pass's (the last pass's once it ends)
-        return units_watched(self._pass(), str(self.path), self.units)
 
     def _pass(self) -> Iterator[Record]:
         flushes: list[Callable[[], Iterator[Record]]] = []  # this pass's flush() of what holds records back

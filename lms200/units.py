@@ -13,8 +13,10 @@ single call's hot path).
 
 from __future__ import annotations
 
+import abc
 import math
 import warnings
+from pathlib import Path
 from typing import Iterable, Iterator
 
 import numpy as np
@@ -153,3 +155,32 @@ def units_watched(records: Iterable[Record], where: str, tally: UnitsTally | Non
         yield rec
     if tally.scans < UNITS_SCANS:
         _warn(tally.problem(), where)
+
+
+class WatchedPasses(abc.ABC):
+    """A log reader whose every pass (``iter(reader)``) is :func:`units_watched` under its ``path``: the
+    pass's first UNITS_SCANS scans looked at for ranges in millimetres, said once a pass. The CARMEN and
+    bag readers (``lms200.carmen``, ``lms200.bag``) are; a class gives ``path`` and ``_pass()``."""
+
+    #: each pass looks at its first scans for ranges in millimetres (:func:`reader_watches`)
+    WATCHES_UNITS = True
+    path: Path
+    _units: UnitsTally | None = None
+
+    @property
+    def units(self) -> UnitsTally:
+        """What the last pass's first UNITS_SCANS scans showed (a new, empty tally before any pass);
+        ``experiments.calibrate`` asks it for its millimetres error instead of tallying them again."""
+        if self._units is None:
+            self._units = UnitsTally()
+        return self._units
+
+    def __iter__(self) -> Iterator[Record]:
+        """The source's records, one pass; its first scans checked for ranges in millimetres (:attr:`units`:
+        this pass's tally, the last pass's once it ends)."""
+        self._units = tally = UnitsTally()
+        return units_watched(self._pass(), str(self.path), tally)
+
+    @abc.abstractmethod
+    def _pass(self) -> Iterator[Record]:
+        """One pass's records, as the source holds them (not yet watched)."""

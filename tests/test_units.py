@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from lms200 import Record, Scan, read_log, write_log
-from lms200.units import RangeUnitsWarning, units_problem
+from lms200.bag import write_bag
+from lms200.units import RangeUnitsWarning, WatchedPasses, units_problem
 
 
 def _room_mm(n: int = 3) -> list[Scan]:
@@ -51,13 +52,17 @@ def test_a_log_in_millimetres_is_said_once_a_pass_by_its_reader(tmp_path: Path) 
         assert len(list(itertools.islice(read_log(log), 10))) == 10
 
 
-def test_a_readers_tally_of_its_pass_is_exposed(tmp_path: Path) -> None:
+@pytest.mark.parametrize("name", ["mm.clf", "mm.bag"])
+def test_a_readers_tally_of_its_pass_is_exposed(tmp_path: Path, name: str) -> None:
     """reader.units: the UnitsTally of its last pass's first 50 scans (calibrate tallied them a second
-    time beside the reader, which kept its own to itself), as units_problem tells them."""
-    log = tmp_path / "mm.clf"
-    write_log(log, [Record(s) for s in _room_mm(60)])
+    time beside the reader, which kept its own to itself), as units_problem tells them; the CARMEN and
+    the bag reader watch their passes by one piece of code (each repeated it), which says the bag's too."""
+    log = tmp_path / name
+    (write_bag if name.endswith(".bag") else write_log)(log, [Record(s) for s in _room_mm(60)])
     reader = read_log(log)
-    with pytest.warns(RangeUnitsWarning):
+    assert isinstance(reader, WatchedPasses) and type(reader).__iter__ is WatchedPasses.__iter__
+    assert reader.units.scans == 0 and reader.units is reader.units  # before any pass: an empty tally
+    with pytest.warns(RangeUnitsWarning, match=rf"^{log}: none of the first 50 scans"):
         scans = [rec.scan for rec in reader]
     assert reader.units.scans == 50 and reader.units.problem() == units_problem(scans[:50])
     with warnings.catch_warnings():
