@@ -4,7 +4,9 @@ A ``Scan``'s ranges are metres, and a reading beyond ``range_max`` is no return 
 written in millimetres (a user's array, a log or bag written so) lie about 1000x too far: every
 one beyond ``range_max``, so every beam reads as no return, no extractor finds a line, and nothing
 said why. :func:`units_problem` tells such scans from open space by what their readings would be
-in metres, divided by 1000; the log readers (``lms200.carmen``, ``lms200.bag``),
+in metres, divided by 1000; its text names millimetres where divided by 100 they would not be in range
+(centimetres ruled out), else millimetres or centimetres (ranges in centimetres, divided by 1000, lie in
+range too: the data cannot tell them apart). The log readers (``lms200.carmen``, ``lms200.bag``),
 ``experiments.compare.compare`` and ``slam.run_slam`` (a user's records, which no reader saw; a
 reader given to them warns itself) warn with it, once per pass or run, from the scans they read
 anyway (none read ahead), never per scan of an extraction: ``features.extract`` does not look (a
@@ -36,12 +38,13 @@ MIN_DISTINCT = 3
 #: readings (10-30 m) of a scanner whose range_max was set below its reach lie below it (0.01-0.03 m)
 NEAREST_SCENE_M = 0.1
 #: share of the readings that must lie within [max(range_min, NEAREST_SCENE_M), range_max] once divided
-#: by 1000 (not all: the LMS200's no-return code in mm mode, 8191 mm, divides to 8.191 m, past 8.183)
+#: by 1000 (not all: the LMS200's no-return code in mm mode, 8191 mm, divides to 8.191 m, past 8.183);
+#: the same share of them divided by 100 leaves centimetres open in the text (:meth:`UnitsTally.evidence`)
 IN_RANGE_SHARE = 0.9
 
 
 class RangeUnitsWarning(LmsbenchWarning):
-    """A source's first scans look like ranges in millimetres given as metres (:func:`units_problem`)."""
+    """A source's first scans look like ranges in millimetres (or centimetres) given as metres (:func:`units_problem`)."""
 
 
 class UnitsTally:
@@ -51,6 +54,7 @@ class UnitsTally:
 
     def __init__(self) -> None:
         self.scans = self.readings = self.in_range = 0
+        self.in_range_cm = 0  # readings in range divided by 100 (what the text says, not whether it is said)
         self.valid = False  # a valid beam in some scan: no doubt left
         self.within = False  # a reading > 0 at or below its range_max (below range_min: not valid, not far either)
         self.least = self.most = math.nan  # the smallest and largest reading
@@ -70,8 +74,11 @@ class UnitsTally:
         self.valid = bool(np.any((r >= lo) & (r <= hi)))
         self.within = self.within or bool(np.any(r <= hi))
         self.readings += int(r.size)
+        near = max(lo, NEAREST_SCENE_M)
         metres = r / 1000.0
-        self.in_range += int(np.count_nonzero((metres >= max(lo, NEAREST_SCENE_M)) & (metres <= hi)))
+        self.in_range += int(np.count_nonzero((metres >= near) & (metres <= hi)))
+        metres = r / 100.0
+        self.in_range_cm += int(np.count_nonzero((metres >= near) & (metres <= hi)))
         self.least, self.most = float(np.fmin(self.least, r.min())), float(np.fmax(self.most, r.max()))
         self.range_max = min(self.range_max, hi)
         if len(self.values) < MIN_DISTINCT:
@@ -82,15 +89,20 @@ class UnitsTally:
         return None if evidence is None else f"none of the first {self.scans} scans has a valid beam: {evidence}"
 
     def evidence(self) -> str | None:
-        """Why the scans added look like millimetres, after "none has a valid beam" (or None)."""
+        """Why the scans added look like millimetres, after "none has a valid beam" (or None): millimetres
+        where divided by 100 fewer than IN_RANGE_SHARE of the readings would be in range, else millimetres
+        or centimetres (whenever it is said, divided by 1000 they are: centimetres are never ruled in)."""
         if self.valid or self.within or self.readings < MIN_READINGS or len(self.values) < MIN_DISTINCT:
             return None
         share = self.in_range / self.readings
         if share < IN_RANGE_SHARE:
             return None
+        cm = self.in_range_cm / self.readings
+        unit = (f", {100 * cm:.0f} % divided by 100: ranges in millimetres or centimetres" if cm >= IN_RANGE_SHARE
+                else ": ranges in millimetres")
         return (f"all {self.readings:,} finite readings lie "
                 f"beyond range_max ({self.range_max:g} m), from {self.least:.6g} to {self.most:.6g}, and "
-                f"{100 * share:.0f} % of them would be in range divided by 1000: ranges in millimetres (or another unit) "
+                f"{100 * share:.0f} % of them would be in range divided by 1000{unit} "
                 "given as metres? A Scan's ranges are metres (a reading beyond range_max is no return, REP-117)")
 
 

@@ -26,7 +26,12 @@ def test_scans_in_millimetres_are_told_and_open_space_is_not() -> None:
     said = units_problem(_room_mm())
     assert said == ("none of the first 3 scans has a valid beam: all 1,083 finite readings lie beyond range_max (8.183 m), "
                     "from 2000.57 to 4998.5, and 100 % of them would be in range divided by 1000: ranges in millimetres "
-                    "(or another unit) given as metres? A Scan's ranges are metres (a reading beyond range_max is no return, REP-117)")
+                    "given as metres? A Scan's ranges are metres (a reading beyond range_max is no return, REP-117)")
+    # the same room in centimetres fires it too (divided by 1000: 0.2-0.5 m), and then divided by 100 it is in
+    # range as well: the text said "millimetres (or another unit)"; it names both, as the data cannot tell them
+    in_cm = [s.replace(ranges=s.ranges / 10.0) for s in _room_mm()]
+    assert units_problem(in_cm) == said.replace("from 2000.57 to 4998.5", "from 200.057 to 499.85").replace(
+        "divided by 1000: ranges in millimetres", "divided by 1000, 100 % divided by 100: ranges in millimetres or centimetres")
     in_metres = [s.replace(ranges=s.ranges / 1000.0) for s in _room_mm()]
     assert all(s.valid.all() for s in in_metres) and units_problem(in_metres) is None
     quiet = {

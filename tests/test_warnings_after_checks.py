@@ -81,7 +81,7 @@ def test_a_millimetre_log_refused_says_its_units_in_the_error(logs, tmp_path, ca
     line = _refused([*command, str(logs["mm"]), "--out", str(tmp_path / ("s.yaml" if command == ["calibrate"] else "out"))],
                     capsys)
     assert line.startswith(f"lmsbench {command[0]}: error: {logs['mm']}: {says}"), line
-    assert "ranges in millimetres (or another unit) given as metres?" in line, line
+    assert "would be in range divided by 1000: ranges in millimetres given as metres?" in line, line  # 15-40 m divided by 100
 
 
 def test_slams_own_warning_before_an_odometry_refusal_is_unsaid(logs, tmp_path, capsys) -> None:
