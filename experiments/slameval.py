@@ -2,7 +2,8 @@
 run's consistency (NEES), and MIT CSAIL (relations error), paper preset against the default.
 
 ``python -m experiments.slameval --out results/slam-eval [--seeds 0-20] [--mit PATH]`` writes
-sim.parquet, mit.parquet, long.parquet and tables.md (markdown). Speeds are CPU time
+sim.parquet, mit.parquet (where the log is), long.parquet (unless ``--long 0``) and tables.md (markdown),
+an earlier run's in the folder removed first. Speeds are CPU time
 (``time.process_time``) of ``run_slam`` (feature extraction included), one process, one core, the
 best of 3 runs on the simulated runs and of 2 for the default preset on MIT CSAIL.
 """
@@ -202,8 +203,12 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    """The evaluation of the parsed options: the tables, written into ``args.out``."""
+    """The evaluation of the parsed options: the tables, written into ``args.out``, whose earlier run's
+    outputs (all ``check_out`` let it hold) are removed first: one this run does not write (long.parquet
+    under `--long 0`, mit.parquet without the log) stayed beside the new tables as if it were this run's."""
     args.out.mkdir(parents=True, exist_ok=True)
+    for name in OUTPUTS:  # before any is written, as options.Owner.remove_earlier: a stopped run leaves no mix
+        (args.out / name).unlink(missing_ok=True)
     md = []
     if args.mit.exists():
         mit = mit_rows(args.mit, ["paper", "default"])

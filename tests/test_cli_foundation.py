@@ -230,6 +230,24 @@ def test_the_slam_evaluations_shortest_duration_keeps_two_scans_at_each_rate(tmp
     assert capsys.readouterr().err.startswith("python -m experiments.slameval: error: argument --out: empty path ''")
 
 
+def test_the_slam_evaluation_leaves_only_its_own_outputs(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """An earlier run's long.parquet and mit.parquet stayed beside the tables of a run that wrote neither (`--long 0`,
+    no MIT log), read as this run's; its own outputs are what is left (the shortest run: one seed, 0.24 s)."""
+    from experiments import slameval
+    from experiments.provenance import read_parquet
+
+    out = tmp_path / "eval"
+    out.mkdir()
+    for name in slameval.OUTPUTS:
+        (out / name).write_text("an earlier run's\n")
+    assert slameval.main(["--out", str(out), "--seeds", "0", "--long", "0", "--mit", str(tmp_path / "none"),
+                          "--duration", f"{slameval.min_duration():g}"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["sim.parquet", "tables.md"]
+    table = read_parquet(out / "sim.parquet")
+    assert sorted(table.rate_hz) == sorted(slameval.RATES_HZ) and set(table.seed) == {0}
+    assert (out / "tables.md").read_text().strip() in capsys.readouterr().out
+
+
 def test_a_missing_input_names_the_file_it_was_likely_meant_to_be(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
                                                                    capsys: pytest.CaptureFixture[str]) -> None:
     """`lmsbench info ../shared/data/carmen/mit-csail.clf` (the file is mit-csail.clf.gz) said
