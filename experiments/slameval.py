@@ -11,6 +11,7 @@ best of 3 runs on the simulated runs and of 2 for the default preset on MIT CSAI
 from __future__ import annotations
 
 import argparse
+import math
 import time
 from pathlib import Path
 
@@ -160,20 +161,22 @@ _long.__name__ = "number"
 
 RATES_HZ = (37.5, 5.0)  # the simulated runs' rates: the LMS200's and decimated
 OUTPUTS = ("sim.parquet", "mit.parquet", "long.parquet", "tables.md")  # what --out receives
+#: the simulated runs' sensor, ``sim.SensorConfig()``'s: 361 beams 0.5 deg apart (a test holds them to it:
+#: importing the simulator to read them took 0.5 s of every parser build, ``--help`` and refusals included)
+SIM_BEAMS, SIM_RESOLUTION_RAD = 361, math.radians(0.5)
 
 
 def min_duration(rates: tuple[float, ...] = RATES_HZ) -> float:
     """The shortest simulated run (s, rounded up to 0.01 s) that keeps two scans at each of ``rates``, the
     fewest the ATE scores: `--duration 0.2` kept one at 5 scans/s and failed after the runs at 37.5 with
-    a traceback ("ate: fewer than 2 estimated poses")."""
-    import math
+    a traceback ("ate: fewer than 2 estimated poses"). From the LMS200's timing (``lms200.timing``): a
+    run's second scan kept at a rate is its every ``round(1 / (period * rate))``-th, as
+    ``sim.records.scan_stamps`` keeps them, and it ends with that scan's last beam."""
+    from lms200.timing import beam_time_offsets, scan_period
 
-    from sim.records import scan_stamps
-    from sim.sensor import SensorConfig
-
-    sensor = SensorConfig()
-    last_beam = float(sensor.beam_time_offsets.max())
-    need = max(float(scan_stamps(sensor, MAX_DURATION_S, rate)[1]) + last_beam for rate in rates)
+    period = scan_period(SIM_RESOLUTION_RAD)
+    last_beam = float(beam_time_offsets(SIM_BEAMS, SIM_RESOLUTION_RAD).max())
+    need = max(max(1, round(1.0 / (period * rate))) * period for rate in rates) + last_beam
     return math.ceil(need * 100 - 1e-6) / 100
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -153,10 +154,12 @@ def test_the_rate_and_progress_options_take_the_other_commands_spelling(command,
     assert getattr(args, dest) == value
 
 
-def test_the_research_scripts_docs_name_answer_help_without_running(capsys: pytest.CaptureFixture[str]) -> None:
+def test_the_research_scripts_docs_name_answer_help_without_running(capsys: pytest.CaptureFixture[str],
+                                                                   monkeypatch: pytest.MonkeyPatch) -> None:
     """`python -m experiments.benchmarks.features --help` (docs/features.md's accuracy table) ignored
     --help and ran the whole table; `python -m experiments.slameval --help` (docs/slam.md) showed a
-    description cut mid-sentence ("..., a long") and options with no word of help or default."""
+    description cut mid-sentence ("..., a long") and options with no word of help or default, and built
+    its parser by importing the simulator (0.5 s; its --duration bound is now from lms200.timing)."""
     import subprocess
     import sys
 
@@ -167,11 +170,14 @@ def test_the_research_scripts_docs_name_answer_help_without_running(capsys: pyte
     assert "world=office" not in bench.stdout
     from experiments import slameval
 
+    for name in ("sim", "sim.records", "sim.sensor"):  # importing any of them fails
+        monkeypatch.setitem(sys.modules, name, None)
     with pytest.raises(SystemExit) as stop:
         slameval.main(["--help"])
     assert stop.value.code == 0
     text = " ".join(capsys.readouterr().out.split())
     assert "paper preset against the default." in text and "(default 0-20)" in text and "(default 90)" in text
+    assert f"at least {slameval.min_duration():g}: two scans at 5 scans/s" in text
 
 
 @pytest.mark.parametrize("given, message", [
@@ -211,8 +217,15 @@ def test_the_slam_evaluations_shortest_duration_keeps_two_scans_at_each_rate(tmp
     simulator keeps them; an existing file as --out was a FileExistsError traceback, `--out ""` wrote into
     the current folder: one line, exit 2."""
     from experiments import slameval
-    from sim import simulate_records
+    from experiments.options import MAX_DURATION_S
+    from sim import SensorConfig, simulate_records
+    from sim.records import scan_stamps
 
+    sensor = SensorConfig()  # the simulator's value, which the parser took from it (importing it: 0.5 s a build)
+    assert (sensor.n_beams, sensor.resolution) == (slameval.SIM_BEAMS, slameval.SIM_RESOLUTION_RAD)
+    for rates in [slameval.RATES_HZ, (37.5,), (5.0,), (1.0,), (20.0, 3.0), (0.01,)]:
+        need = max(float(scan_stamps(sensor, MAX_DURATION_S, rate)[1]) for rate in rates) + sensor.beam_time_offsets.max()
+        assert slameval.min_duration(rates) == math.ceil(need * 100 - 1e-6) / 100, rates
     shortest = slameval.min_duration()
     for rate in slameval.RATES_HZ:
         assert len(simulate_records("office", seed=0, duration=shortest, rate_hz=rate)) >= 2
