@@ -21,7 +21,7 @@ import warnings
 from contextlib import contextmanager
 from pathlib import Path
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterator, Mapping, Sequence
+from typing import Any, Callable, Iterator, Mapping, NamedTuple, Sequence
 
 import yaml
 
@@ -1460,10 +1460,19 @@ def check_study_tables(folder: str | os.PathLike) -> Path:
     return p
 
 
-def read_sweep_results(folder: str | os.PathLike) -> tuple[Path, Any]:
+class SweepResults(NamedTuple):
+    """A ``figures --sweep`` folder as :func:`read_sweep_results` read it for its checks, to draw from."""
+
+    folder: Path
+    table: Any  # its results.parquet, a pandas DataFrame
+    spec: dict  # its sweep.yaml
+
+
+def read_sweep_results(folder: str | os.PathLike) -> SweepResults:
     """A sweep folder with results.parquet holding at least one successful cell, and that table (a
-    pandas DataFrame) as read for the checks: ``figures --sweep`` draws from it (it read the table again for
-    its plots' names, its record and its drawing: four times a sweep)."""
+    pandas DataFrame) and its sweep.yaml as read for the checks: ``figures --sweep`` draws from them (it
+    read the table and parsed the sweep.yaml again for its plots' names, its record and its drawing: four
+    times a sweep)."""
     from experiments.provenance import read_parquet
 
     p = Path(folder)
@@ -1528,7 +1537,7 @@ def read_sweep_results(folder: str | os.PathLike) -> tuple[Path, Any]:
         raise InputError(f"--sweep {p}: its results.parquet's row {strange}: the table and the sweep.yaml "
                          f"({spec_path}) are of different sweeps, or the table was edited; run the sweep again into a "
                          "new folder")
-    return p, table
+    return SweepResults(p, table, spec)
 
 
 def _foreign_rows(table: Any, cells: list[dict], params: list[str]) -> str | None:

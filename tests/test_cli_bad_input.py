@@ -1021,11 +1021,12 @@ def test_sweeps_of_other_names_are_drawn_side_by_side(tmp_path):
     """The check leaves two sweeps of other names alone: each one's plots are drawn."""
     from experiments.commands.figures import _check_sweeps_apart
     from experiments.figures.make import sweep_stems
+    from experiments.options import read_sweep_results
 
     a = _sweep_folder(tmp_path / "a" / "sweep", 0.5, "name: one\nkind: extract\ngrid:\n  x: [1, 2]\n")
     b = _sweep_folder(tmp_path / "b" / "sweep", 0.9, "name: two\nkind: extract\ngrid:\n  x: [1, 2]\n")
     assert sweep_stems(a) == ["sweep_one_f1"] and sweep_stems(b) == ["sweep_two_f1"]
-    _check_sweeps_apart([(a, None), (b, None)])  # each folder with its table (None: read for the check)
+    _check_sweeps_apart([read_sweep_results(a), read_sweep_results(b)])  # each folder with its table and sweep.yaml
 
 
 def test_out_may_not_write_over_what_the_run_reads(files, tmp_path, capsys):

@@ -395,9 +395,11 @@ def test_a_dot_in_a_figures_name_is_no_suffix(tmp_path):
 
 def test_figures_reads_each_sweep_table_once(tmp_path, monkeypatch, capsys):
     """`figures --sweep DIR` read DIR/results.parquet four times (its checks, the plots' names, figures.yaml's
-    list of them, the drawing); now its checks' read is passed on (options.read_sweep_results)."""
+    list of them, the drawing), and parsed DIR/sweep.yaml as often; now its checks' reads are passed on
+    (options.read_sweep_results)."""
     import experiments.figures.study as study
     import experiments.provenance as provenance
+    import lms200.yamlio as yamlio
     from experiments.cli import main
     from experiments.figures.study import StudyConfig, save_tables
 
@@ -414,8 +416,17 @@ def test_figures_reads_each_sweep_table_once(tmp_path, monkeypatch, capsys):
         reads.append(str(path))
         return real(path, **kwargs)
 
+    parsed = []
+    parse = yamlio.yaml.load
+
+    def counted_yaml(text, **kwargs):
+        parsed.append(text)
+        return parse(text, **kwargs)
+
     monkeypatch.setattr(provenance, "read_parquet", counted)
     monkeypatch.setattr(study, "read_parquet", counted)
+    monkeypatch.setattr(yamlio.yaml, "load", counted_yaml)
     assert main(["figures", "--tables", str(tmp_path / "tables"), "--sweep", str(sweep), "--out", str(tmp_path / "o")]) == 0
     assert "sweep_one_f1" in capsys.readouterr().out and (tmp_path / "o" / "sweep_one_f1.png").is_file()
     assert [r for r in reads if r.endswith("results.parquet")] == [str(sweep / "results.parquet")]
+    assert parsed.count((sweep / "sweep.yaml").read_text()) == 1, len(parsed)

@@ -11,7 +11,7 @@ from lms200.yamlio import dump as dump_yaml
 
 from experiments.logargs import add_log_options, given_log_flags, plain_log_options, read_log_options
 from experiments.options import (WORLDS, DEMO_OWNER, DURATION, FIGURE_ENDS, FIGURE_PART_FILES, FIGURES_OUTPUTS, FIGURES_OWNER, SEED, STUDY_TABLES, InputError, OutTree, check_log, real_path,
-                                 check_methods, check_out, check_study_tables, read_sweep_results, path_arg, scan_rate, world_name,
+                                 check_methods, check_out, check_study_tables, read_sweep_results, SweepResults, path_arg, scan_rate, world_name,
                                  text, check_link, recorded_names)
 
 
@@ -55,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
     # alone a user's fig3_scan.png or accuracy_speed.csv in --out was written over; --tables: no table is
     replaces = FIGURES_OUTPUTS if args.tables is None else OutTree(FIGURES_OUTPUTS.files)
     check_out(args.out, writes=writes, owner=FIGURES_OWNER, replaces=replaces, default="results/figures")
-    # each sweep's table read once, by its checks, and drawn from (it was read four times: the checks, the plots'
+    # each sweep's table and sweep.yaml read once, by its checks, and drawn from (each was read four times: the checks, the plots'
     # names, the record and the drawing)
     sweeps = [read_sweep_results(folder) for folder in args.sweep]
     _check_sweeps_apart(sweeps)
@@ -117,8 +117,8 @@ def run(args: argparse.Namespace) -> int:
             raise LmsbenchError(f"--tables {args.tables}: the tables do not hold what the figures read "
                                 f"({type(exc).__name__}: {' '.join(str(exc).split())[:160]}); redraw from a "
                                 "complete tables/ folder of `lmsbench figures` or `lmsbench demo`") from None
-        for folder, table in sweeps:
-            written.update(draw_sweep(folder, args.out, log=say, table=table))
+        for folder, table, spec in sweeps:
+            written.update(draw_sweep(folder, args.out, log=say, table=table, spec=spec))
     args.outputs_complete = True  # a reader of stdout that goes away now leaves them whole (cli._stdout_gone)
     if run_folder:
         link_latest(args.out)
@@ -194,24 +194,24 @@ def _demos_figures(out: Path) -> bool:
     return real.name == "figures" and DEMO_OWNER.wrote_in(real.parent)
 
 
-def _check_sweeps_apart(sweeps: list[tuple[Path, Any]]) -> None:
+def _check_sweeps_apart(sweeps: list[SweepResults]) -> None:
     """Refuse, before any work, two ``--sweep`` folders whose plots would have one name: a sweep's
     plots are ``sweep_<name>_<metric>.*`` by the ``name:`` of its sweep.yaml, so one sweep file run
     into two folders (``sweep s.yaml --out a``, ``--out b``) drew b's plots over a's, exit 0
     ("sweep_k_vs_noise_f1 ... wrote 31 files"); the same folder twice is refused as such, as
     ``compare`` refuses a source given twice (and, like it, two logs of one figure name). ``sweeps``: each
-    folder with its table (``options.read_sweep_results``)."""
+    folder with its table and sweep.yaml (``options.read_sweep_results``)."""
     from experiments.figures.make import sweep_stems
 
     seen: dict[str, Path] = {}  # a plot's name -> the --sweep folder that draws it
     folders_seen: dict[Path, Path] = {}  # a folder's real path -> the --sweep word that gave it
-    for folder, table in sweeps:
+    for folder, table, spec in sweeps:
         first = folders_seen.setdefault(real_path(folder), folder)
         if first is not folder:
             raise InputError(f"--sweep {folder} is given twice ({first} and {folder}): each sweep folder once")
-        stems = sweep_stems(folder, table)
+        stems = sweep_stems(folder, table, spec)
         if not stems:  # nothing of it was drawn, and the run said nothing of it
-            raise InputError(f"--sweep {folder}: {_nothing_to_plot(folder, table)}")
+            raise InputError(f"--sweep {folder}: {_nothing_to_plot(folder, table, spec)}")
         for stem in stems:
             other = seen.setdefault(stem, folder)
             if other is not folder:
@@ -220,12 +220,12 @@ def _check_sweeps_apart(sweeps: list[tuple[Path, Any]]) -> None:
                                  "(another --out), or give one of them another name: in its sweep.yaml")
 
 
-def _nothing_to_plot(folder: Path, table: Any) -> str:  # noqa: ANN401 - a pandas DataFrame
+def _nothing_to_plot(folder: Path, table: Any, spec: dict) -> str:  # noqa: ANN401 - a pandas DataFrame
     """Why a sweep folder gives no plot: no metric with a value (its cells failed), or no grid
     parameter that varies and no sampled one (nothing to plot against)."""
     from experiments.figures.make import sweep_plan
 
-    table, _, varied, sampled, metrics = sweep_plan(folder, table)
+    table, _, varied, sampled, metrics = sweep_plan(folder, table, spec)
     if not metrics:
         failed = int((table["status"] != "ok").sum()) if "status" in table else 0
         # "the others gave nan for every metric" was said of a kind's text, inf or boolean metrics too
@@ -236,7 +236,7 @@ def _nothing_to_plot(folder: Path, table: Any) -> str:  # noqa: ANN401 - a panda
             "against (its results.csv holds them)")
 
 
-def _record(args: argparse.Namespace, sweeps: list[tuple[Path, Any]]) -> str:
+def _record(args: argparse.Namespace, sweeps: list[SweepResults]) -> str:
     """figures.yaml: what drew the figures of its folder (options.FIGURES_OWNER tells the folder by
     it): a figure and its CSV say nothing of lmsbench, and ``--tables T --out DIR`` writes no table."""
 
@@ -245,7 +245,7 @@ def _record(args: argparse.Namespace, sweeps: list[tuple[Path, Any]]) -> str:
 
     # sweep_plots: the files of the --sweep plots, named by a pattern (sweep_*), listed before they are drawn: the
     # next figures run into the folder removes exactly these (options.recorded_names), not a user's sweep_notes.csv
-    plots = [f"{stem}{end}" for folder, table in sweeps for stem in sweep_stems(folder, table) for end in FIGURE_ENDS]
+    plots = [f"{stem}{end}" for sweep in sweeps for stem in sweep_stems(*sweep) for end in FIGURE_ENDS]
     record = {"command": "lmsbench figures", "tables": str(args.tables) if args.tables else "tables (computed by this run)",
               "sweeps": [str(folder) for folder in args.sweep], "sweep_plots": plots, "versions": versions()}
     return ("# what drew the figures in this folder; lmsbench figures --out replaces its files only beside this record\n"

@@ -289,14 +289,15 @@ def draw_figures(tables: dict[str, pd.DataFrame], out: Path, signals_k: int = 10
 
 
 def draw_sweep(folder: Path, out: Path, log: Callable[[str], None] | None = None,
-               table: pd.DataFrame | None = None) -> dict[str, list[Path]]:
+               table: pd.DataFrame | None = None, spec: dict | None = None) -> dict[str, list[Path]]:
     """Plots of one sweep folder: each metric against the first grid parameter, a line per value
     of the second, a panel per value of the third (or combination of the rest); mean +/- std over
     seeds and random draws. A linked grid key "a,b" counts as its first name. The plots are
     ``out/sweep_<name>_<metric>.*`` (``sweep_stems``), name being the sweep.yaml's ``name:``.
     ``log`` is told of each plot as it starts, as by :func:`draw_figures`. ``table``: the folder's
-    results.parquet as read already (``options.read_sweep_results``), else read here."""
-    table, name, varied, sampled, metrics = sweep_plan(folder, table)
+    results.parquet as read already (``options.read_sweep_results``), else read here; ``spec``: its
+    sweep.yaml as parsed already, likewise."""
+    table, name, varied, sampled, metrics = sweep_plan(folder, table, spec)
 
     def starting(stem: str, number: int) -> None:
         if log is not None:
@@ -333,23 +334,26 @@ def draw_sweep(folder: Path, out: Path, log: Callable[[str], None] | None = None
     return written
 
 
-def sweep_stems(folder: Path, table: pd.DataFrame | None = None) -> list[str]:
+def sweep_stems(folder: Path, table: pd.DataFrame | None = None, spec: dict | None = None) -> list[str]:
     """The names (without .png / .pdf / .csv) of the plots ``draw_sweep`` draws of ``folder``,
     drawing nothing: ``figures`` checks before any work that no two ``--sweep`` folders share one
     (two sweeps of one name, e.g. one sweep file run into two folders, wrote the second's plots over
-    the first's, exit 0). ``table``: as :func:`draw_sweep`'s."""
-    _, name, varied, sampled, metrics = sweep_plan(folder, table)
+    the first's, exit 0). ``table``, ``spec``: as :func:`draw_sweep`'s."""
+    _, name, varied, sampled, metrics = sweep_plan(folder, table, spec)
     return [f"sweep_{name}_{m}" for m in metrics] if varied or sampled else []
 
 
-def sweep_plan(folder: Path, table: pd.DataFrame | None = None) -> tuple[pd.DataFrame, str, list[str], list[str], list[str]]:
+def sweep_plan(folder: Path, table: pd.DataFrame | None = None,
+               spec: dict | None = None) -> tuple[pd.DataFrame, str, list[str], list[str], list[str]]:
     """What ``draw_sweep`` plots of ``folder``: its table (``table``, its results.parquet read already,
-    else read here), name, varied grid parameters, sampled parameters and metrics."""
+    else read here), name, varied grid parameters, sampled parameters and metrics (``spec``: its
+    sweep.yaml parsed already, else parsed here)."""
     from experiments.figures.study import check_table, read_table
 
     path = folder / "results.parquet"
     table = read_table(path) if table is None else check_table(table, path)
-    spec = load_yaml((folder / "sweep.yaml").read_text(), words=True)  # the sweep's record, an earlier version's too
+    if spec is None:  # the sweep's record, an earlier version's too
+        spec = load_yaml((folder / "sweep.yaml").read_text(), words=True)
     name = spec.get("name", folder.name)
     if "name" in spec and not _file_name(name):  # it names the plots' files
         from lms200 import LmsbenchError
