@@ -1301,3 +1301,33 @@ def test_a_resume_reads_a_null_parameter_from_the_cells_footer(tmp_path, monkeyp
         path = out / "cells" / f"{cell_key(spec.kind, params)}.parquet"
         assert store._params_differ(path, pq.ParquetFile(path).metadata, params) is None
         assert store._params_differ(path, pq.ParquetFile(path).metadata, {**params, "e": 1}) == "e=None, not 1"
+
+
+def test_a_sweeps_cells_folder_is_checked_once_whether_it_exists_or_is_made(tmp_path, monkeypatch):
+    """The cells folder was checked as writable twice when cells remained (plan_sweep, then the run): once
+    now, by plan_sweep, which also checks where a new folder's is made (a new folder beneath a read-only
+    one was a PermissionError traceback from the library, the command line's check_out aside)."""
+    import experiments.sweep.store as store
+
+    checks = []
+    real_check = store.CellStore.check_writable
+
+    def counted(self):
+        checks.append(self.cells)
+        return real_check(self)
+
+    monkeypatch.setattr(store.CellStore, "check_writable", counted)
+    log, out = tmp_path / "log.txt", tmp_path / "new" / "out"
+    spec = make_spec(log, xs=[0], seeds=[0])
+    assert run_sweep(spec, out, "inprocess", progress=False).computed == 1 and checks == [out / "cells"]
+    next((out / "cells").glob("*.parquet")).unlink()
+    assert run_sweep(spec, out, "inprocess", progress=False).computed == 1 and checks == [out / "cells"] * 2
+    assert run_sweep(spec, out, "inprocess", progress=False).computed == 0 and len(checks) == 2  # none left: none
+    locked = tmp_path / "locked"  # a read-only folder, as os.access sees it (root passes over modes)
+    locked.mkdir()
+    real_access = os.access
+    monkeypatch.setattr(store.os, "access", lambda p, mode, **kw: Path(p) != locked and real_access(p, mode, **kw))
+    with pytest.raises(LmsbenchError, match=rf"^{locked / 'a' / 'cells'}: the sweep's folder of finished cells cannot "
+                                            rf"be made: {locked} is not writable, and cells are left to compute"):
+        run_sweep(spec, locked / "a", "inprocess", progress=False)
+    assert list(locked.iterdir()) == [] and computed(log) == ["0 0", "0 0"]

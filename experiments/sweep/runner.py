@@ -79,7 +79,7 @@ def plan_sweep(spec: SweepSpec, out: str | Path, fn: Any, retry_failed: bool = F
     (a folder without ``cells/`` has none finished).
 
     Raises:
-        LmsbenchError: ``out/cells`` cannot be read, or cannot be written while cells remain.
+        LmsbenchError: ``out/cells`` cannot be read, or cannot be written (or, absent, made) while cells remain.
     """
     out = _sweep_folder(out)
     cells = spec.cells()
@@ -91,8 +91,8 @@ def plan_sweep(spec: SweepSpec, out: str | Path, fn: Any, retry_failed: bool = F
     if retry_failed:
         done = {k for k in done if store.status(k) == "ok"}
     todo = list({key: params for key, params in zip(keys, cells) if key not in done}.items())  # identical cells once
-    if todo and store.cells.is_dir():
-        store.check_writable()  # before any cell is computed (or a scheduler reached)
+    if todo:
+        store.check_writable()  # before any cell is computed (or a scheduler reached); the folder as it is or as made
     return SweepPlan(spec, out, retry_failed, keys, dict(zip(keys, inputs)), todo)
 
 
@@ -201,9 +201,7 @@ def _run_into(plan: SweepPlan, store: CellStore, fn: Any, executor: Any, workers
     digests = getattr(fn, "input_digests", None)
     from experiments.provenance import versions, write_record
 
-    if todo:
-        store.check_writable()  # before any cell is computed
-    record = spec_record(spec)
+    record = spec_record(spec)  # its cells folder was checked as writable by plan_sweep
     # every check first, then the first write: a run refused above (a cell folder not writable, a folder where a
     # cell's file goes, an input that cannot be read) rewrote sweep.yaml and versions.yaml and removed the
     # folder's table of the earlier sweep before it was refused

@@ -110,12 +110,25 @@ class CellStore:
         return keys
 
     def check_writable(self) -> None:
-        """Raise LmsbenchError when cells cannot be written into the cells folder: a resumed sweep
-        whose cells/ was read-only computed its first cell, then failed naming a temporary file
-        (``cells/.KEY.xxxx.tmp: permission denied``)."""
-        if not os.access(self.cells, os.W_OK | os.X_OK):
-            raise LmsbenchError(f"{self.cells}: the sweep's folder of finished cells is not writable, and cells are "
-                                "left to compute; make it writable (chmod u+w) to resume the sweep")
+        """Raise LmsbenchError when cells cannot be written into the cells folder, as it is, or, where it
+        is yet to be made (a new sweep folder), into the nearest existing folder it is made in: a resumed
+        sweep whose cells/ was read-only computed its first cell, then failed naming a temporary file
+        (``cells/.KEY.xxxx.tmp: permission denied``), and a new folder beneath a read-only one failed
+        with a PermissionError making it. One check, before any cell is computed or a scheduler reached
+        (``runner.plan_sweep``; the run checked an existing folder a second time)."""
+        if self.cells.is_dir():
+            if not os.access(self.cells, os.W_OK | os.X_OK):
+                raise LmsbenchError(f"{self.cells}: the sweep's folder of finished cells is not writable, and cells "
+                                    "are left to compute; make it writable (chmod u+w) to resume the sweep")
+            return
+        if self.cells.exists() or self.cells.is_symlink():  # a file (or a broken link) there: making it says so
+            return
+        parent = self.cells.parent
+        while not parent.exists() and parent != parent.parent:
+            parent = parent.parent
+        if parent.is_dir() and not os.access(parent, os.W_OK | os.X_OK):
+            raise LmsbenchError(f"{self.cells}: the sweep's folder of finished cells cannot be made: {parent} is not "
+                                "writable, and cells are left to compute; give a folder that can be written")
 
     def status(self, key: str) -> str | None:
         """"ok", "error", or None when the cell has no file (or a damaged one)."""
