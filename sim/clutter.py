@@ -262,6 +262,7 @@ WALL_RUN_M = (0.8, 2.4)  # length of a run of wall-side stuff
 FLOOR_ITEM_M = (0.15, 0.5)  # width and depth of a box, bag or computer on the floor
 ROUND_SHARE = 0.4  # share of the things along walls that are round (bags, rolls, round bins)
 TURN_MAX_RAD = 0.4  # the others (boxes) stand turned by up to this from the wall's line
+FLOOR_GAP_M = 0.3  # most space between two things along a wall
 ROUGH_RUN_M = (0.3, 2.0)  # length of a stretch of rough fill
 ROUGH_ITEM_M = (0.03, 0.12)  # width of one thing in it
 ROUGH_DEPTH_M = (0.05, 0.40)  # its depth
@@ -289,20 +290,9 @@ def _wall_faces(lay: Layout, h: float) -> list[tuple[int, np.ndarray, np.ndarray
 def _run_items(rng: np.random.Generator, length: float) -> list[tuple[float, float, float, float, bool]]:
     """The solids of one run along a wall, in the run's frame (s along the wall from the run's
     start, d out from the wall face): (s centre, half width, depth, yaw offset, round): things of
-    FLOOR_ITEM_M width and depth, 0-0.3 m apart; a share ROUND_SHARE of them round (bags, rolls,
+    FLOOR_ITEM_M width and depth, 0-FLOOR_GAP_M apart; a share ROUND_SHARE of them round (bags, rolls,
     round bins: depth = width), the others boxes turned by up to TURN_MAX_RAD."""
-    items = []
-    s = 0.0
-    while True:
-        w, d = float(rng.uniform(*FLOOR_ITEM_M)), float(rng.uniform(*FLOOR_ITEM_M))
-        if s + w > length:
-            break
-        if rng.random() < ROUND_SHARE:
-            items.append((s + w / 2, w / 2, w, 0.0, True))
-        else:
-            items.append((s + w / 2, w / 2, d, float(rng.uniform(-TURN_MAX_RAD, TURN_MAX_RAD)), False))
-        s += w + float(rng.uniform(0.0, 0.3))
-    return items
+    return _items_along(rng, length, FLOOR_ITEM_M, FLOOR_ITEM_M, FLOOR_GAP_M, ROUND_SHARE, TURN_MAX_RAD)
 
 
 def _rough_items(rng: np.random.Generator, length: float) -> list[tuple[float, float, float, float, bool]]:
@@ -312,17 +302,26 @@ def _rough_items(rng: np.random.Generator, length: float) -> list[tuple[float, f
     front is shorter than a line extractor's shortest line (8 beams: 0.14 m at 2 m) and most
     neighbouring fronts step in depth by more than the 3 cm a line may explain; a turned item's
     side face can be as long as its depth."""
+    return _items_along(rng, length, ROUGH_ITEM_M, ROUGH_DEPTH_M, ROUGH_GAP_M, ROUGH_ROUND_SHARE, ROUGH_TURN_MAX_RAD)
+
+
+def _items_along(rng: np.random.Generator, length: float, widths: tuple[float, float], depths: tuple[float, float],
+                 gap: float, round_share: float, turn_max: float) -> list[tuple[float, float, float, float, bool]]:
+    """Things side by side along ``length`` m of a wall face, from s = 0 until the next would pass
+    ``length``, as :func:`_run_items` gives them: each ``widths`` wide and ``depths`` deep (m, drawn
+    uniformly), 0-``gap`` m apart; a share ``round_share`` round (depth = width), the others turned by
+    up to ``turn_max`` rad (the run's and the rough fill's, which wrote this loop out twice)."""
     items = []
     s = 0.0
     while True:
-        w, d = float(rng.uniform(*ROUGH_ITEM_M)), float(rng.uniform(*ROUGH_DEPTH_M))
+        w, d = float(rng.uniform(*widths)), float(rng.uniform(*depths))
         if s + w > length:
             break
-        if rng.random() < ROUGH_ROUND_SHARE:
+        if rng.random() < round_share:
             items.append((s + w / 2, w / 2, w, 0.0, True))
         else:
-            items.append((s + w / 2, w / 2, d, float(rng.uniform(-ROUGH_TURN_MAX_RAD, ROUGH_TURN_MAX_RAD)), False))
-        s += w + float(rng.uniform(0.0, ROUGH_GAP_M))
+            items.append((s + w / 2, w / 2, d, float(rng.uniform(-turn_max, turn_max)), False))
+        s += w + float(rng.uniform(0.0, gap))
     return items
 
 
