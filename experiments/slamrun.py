@@ -122,6 +122,7 @@ class LogScans:
         self.geometries: list[tuple[int, float, float]] = list(rows.geometries)  # (beams, angle_increment, range_max)
         self.odom, self.truth, self.corrected = rows.odom.taken(), rows.truth.taken(), rows.corrected.taken()
         self._recent: dict[int, int] = {}  # id(scan) -> its index, the last RECENT_SCANS scans given
+        self.read_seconds = self.read_cpu_seconds = 0.0  # wall-clock and CPU time the passes spent reading the log
 
     def __len__(self) -> int:
         return int(self.numbers.size)
@@ -149,24 +150,39 @@ class LogScans:
         return last
 
     def _pass(self, n: int) -> Iterator[Record]:
-        """The first ``n`` scans kept, read again from the log."""
+        """The first ``n`` scans kept, read again from the log; the time spent reading and checking them is
+        added to ``read_seconds`` and ``read_cpu_seconds``."""
         if n <= 0:
             return
+        import warnings
+
         self._recent = {}
         wanted = self.numbers[:n].tolist()
         j = read = 0
         records = iter(self.reader)
         try:
-            for rec in _silenced(records):
+            while True:
+                wall, cpu = time.perf_counter(), time.process_time()
+                say = warnings.showwarning  # the reader's warnings unsaid: its first pass said them (_unsaid)
+                warnings.showwarning = _unsaid
+                try:
+                    rec = next(records, None)
+                finally:
+                    warnings.showwarning = say
+                if rec is not None and read == wanted[j] and (rec.scan.stamp != self.stamps[j]
+                                                             or _crc(rec.scan) != self.crcs[j]):
+                    raise LmsbenchError(
+                        f"{self.where}: scan {read} is not the one read before (its stamp {fixed(rec.scan.stamp)} s, "
+                        f"first read {fixed(self.stamps[j])} s, or its ranges differ): the file changed while the run "
+                        "read it (a SLAM run reads its log again for each pass over the scans); run again once no "
+                        "program writes it")
+                self.read_seconds += time.perf_counter() - wall
+                self.read_cpu_seconds += time.process_time() - cpu
+                if rec is None:
+                    break
                 k, read = read, read + 1
                 if k != wanted[j]:
                     continue
-                if rec.scan.stamp != self.stamps[j] or _crc(rec.scan) != self.crcs[j]:
-                    raise LmsbenchError(
-                        f"{self.where}: scan {k} is not the one read before (its stamp {fixed(rec.scan.stamp)} s, first "
-                        f"read {fixed(self.stamps[j])} s, or its ranges differ): the file changed while the run read it "
-                        "(a SLAM run reads its log again for each pass over the scans); run again once no program "
-                        "writes it")
                 self._recent.pop(id(rec.scan), None)
                 self._recent[id(rec.scan)] = j
                 if len(self._recent) > RECENT_SCANS:
@@ -229,26 +245,11 @@ class _Light:
     corrected: tuple[float, ...] | None
 
 
-def _silenced(records: Iterator[Record]) -> Iterator[Record]:
-    """``records`` (a reader's pass after its first) with the warnings the reader gives while reading
-    them not shown: its first pass said them (a log's unknown PARAM line, its ranges in millimetres).
-    ``warnings.showwarning`` is swapped for each record read, not the filters: a change of the filters
-    makes Python say a run's own warnings again that it says once."""
-    import warnings
-
-    def unsaid(*args: Any, **kwargs: Any) -> None:  # noqa: ANN401 - showwarning's arguments
-        return None
-
-    while True:
-        say = warnings.showwarning
-        warnings.showwarning = unsaid
-        try:
-            rec = next(records, None)
-        finally:
-            warnings.showwarning = say
-        if rec is None:
-            return
-        yield rec
+def _unsaid(*args: Any, **kwargs: Any) -> None:  # noqa: ANN401 - showwarning's arguments
+    """``warnings.showwarning`` while a pass of :class:`LogScans` reads a record: the reader's warnings are
+    not said again (a log's unknown PARAM line, its ranges in millimetres). The function is swapped for each
+    record, not the filters: a change of the filters makes Python say again a run's own warnings that it
+    says once."""
 
 
 @dataclass
@@ -713,10 +714,11 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     :func:`earlier_run_files` tells an earlier lmsbench slam run wrote (a user's own metrics.json
     and slam.png in --out were deleted).
     """
-    t0, c0 = time.perf_counter(), time.process_time()
+    scans = data.records
+    t0, c0 = _clocks(scans)  # the SLAM's own time: the passes' reading of the log is taken out (_since)
     with scans_of(data.name, data.records, data.records.numbers):  # a user's --extractor MODULE:FUNCTION that fails names its scan
         result = _quiet_bounds(_bar(data.records, "slam", progress), config)
-    seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
+    seconds, cpu = _since(scans, t0, c0)
     if out is not None:
         # an earlier run's outputs, all but the config.yaml written over whole next, so that no stop leaves one of
         # them beside this run's files; records (map.json, metrics.json) last (options.Owner.remove_earlier)
@@ -735,14 +737,14 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
         if progress:
             say_on_terminal(f"slam: baseline: the paper preset (EKF) over the same {len(data.records)} scans, for the "
                             "comparison table (--no-paper-baseline leaves it out) ...")
-        t1, c1 = time.perf_counter(), time.process_time()
+        t1, c1 = _clocks(scans)
         paper_config = dataclasses.replace(config, preset="paper")  # the same motion input as the run
         with scans_of(data.name, data.records, data.records.numbers):
             paper = _quiet_bounds(_bar(data.records, "paper preset", progress), paper_config)
         say_bounds("the paper preset baseline", paper, paper_config)
         table.append({"source": _source_name(paper_config), **_flat(score(paper.trajectory, data, paper)),
-                      "cpu_scans_per_s": len(data.records) / max(time.process_time() - c1, 1e-9),
-                      "seconds": time.perf_counter() - t1})
+                      "cpu_scans_per_s": len(data.records) / max(_since(scans, t1, c1)[1], 1e-9),
+                      "seconds": _since(scans, t1, c1)[0]})
     odo = data.odometry
     if odo is not None:
         raw = _flat(score(odo, data))
@@ -753,13 +755,13 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
                 say_on_terminal(f"slam: baseline: the paper preset driven by the input's odometry over the same "
                                 f"{len(data.records)} scans, for the comparison table (--no-odometry-baseline leaves "
                                 "it out) ...")
-            t1 = time.perf_counter()
+            t1, c1 = _clocks(scans)
             odo_config = dataclasses.replace(config, preset="paper", motion=dataclasses.replace(config.motion, use_odometry=True))
             with scans_of(data.name, data.records, data.records.numbers):
                 with_odo = _quiet_bounds(_bar(data.records, "paper preset (odometry)", progress), odo_config)
             say_bounds("the paper preset (odometry) baseline", with_odo, odo_config)
             table.append({"source": "paper preset (odometry)", **_flat(score(with_odo.trajectory, data, with_odo)),
-                          "seconds": time.perf_counter() - t1})
+                          "seconds": _since(scans, t1, c1)[0]})
     consistency = {
         "diverged": bool(d["diverged"]),
         "diverged_at": d["diverged_at"],
@@ -792,6 +794,18 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     if data.relations is not None and "mit" in data.name.lower():
         metrics["anchors_relations_trans_mean_m"] = MIT_ANCHORS
     return SlamRun(result, metrics, seconds)
+
+
+def _clocks(scans: LogScans) -> tuple[float, float]:
+    """The wall clock and the process's CPU time (s), less the time ``scans``' passes spent reading the log:
+    a run's time is its extraction's and SLAM's (:func:`_since`), as when the scans were held in memory."""
+    return time.perf_counter() - scans.read_seconds, time.process_time() - scans.read_cpu_seconds
+
+
+def _since(scans: LogScans, wall: float, cpu: float) -> tuple[float, float]:
+    """Wall-clock and CPU seconds since :func:`_clocks` gave ``wall`` and ``cpu``, the reading of the log left out."""
+    now_wall, now_cpu = _clocks(scans)
+    return now_wall - wall, now_cpu - cpu
 
 
 def _bar(records: LogScans, desc: str, progress: bool) -> Iterable[Record]:
