@@ -104,17 +104,17 @@ def _crc(scan: Any) -> int:  # noqa: ANN401 - an lms200.Scan
 class LogScans:
     """The scans :func:`load_input` kept of a log, read again from it at each pass (``for rec in
     scans``): a run holds one compact row a scan (its number in the log, stamp, beam geometry, poses
-    and a CRC-32 of its ranges: 48 to 96 B), not the scans (4.0 KB a scan of a CARMEN log of 361 beams),
-    so that ``lmsbench slam`` keeps about what its SLAM runs keep (docs/slam.md, "Memory"). A pass reads
-    the whole log up to its last scan kept (MIT CSAIL's 1,988 scans: 0.3 s) with the reader's warnings
-    silenced (its first pass said them), and raises LmsbenchError where a scan differs from the first
-    pass's (stamp or ranges) or the log ends before it: the file changed between passes.
+    and a CRC-32 of its ranges: 48 to 96 B), not the scans (3.6 KB a scan of MIT CSAIL, 361 beams),
+    so that ``lmsbench slam`` keeps about what its SLAM runs keep (docs/slam.md, ``lmsbench slam``). A pass
+    reads the whole log up to its last scan kept with a reader of its own (``open_log()``; MIT CSAIL's 1,988
+    scans: 0.3 s), the reader's warnings unsaid (the first read said them), and raises LmsbenchError where
+    a scan differs from the first read's (stamp or ranges) or the log ends before it: the file changed.
 
     Sized and re-iterable, as a list of the records was; ``scans[k]`` is a pass up to scan ``k``."""
 
-    def __init__(self, reader: Iterable[Record], where: str, rows: ScanRows | None = None) -> None:
+    def __init__(self, open_log: Callable[[], Iterable[Record]], where: str, rows: ScanRows | None = None) -> None:
         rows = rows if rows is not None else ScanRows()
-        self.reader, self.where = reader, where
+        self.open_log, self.where = open_log, where  # a new reader for each pass: two passes at once share nothing
         self.numbers: np.ndarray = rows.numbers.taken()  # the log's own scan number of each (from 0)
         self.stamps: np.ndarray = rows.stamps.taken()  # s
         self.crcs: np.ndarray = rows.crcs.taken()
@@ -128,9 +128,9 @@ class LogScans:
         return int(self.numbers.size)
 
     def taken(self, keep: Sequence[int] | np.ndarray) -> "LogScans":
-        """These scans at the indices ``keep`` (in order), read from the same reader."""
+        """These scans at the indices ``keep`` (in order), read from the same log."""
         keep = np.asarray(keep, dtype=np.int64)
-        out = LogScans(self.reader, self.where)
+        out = LogScans(self.open_log, self.where)
         out.numbers, out.stamps, out.crcs, out.shapes = (a[keep] for a in (self.numbers, self.stamps, self.crcs, self.shapes))
         out.geometries = self.geometries
         out.odom, out.truth, out.corrected = (None if a is None else a[keep] for a in (self.odom, self.truth, self.corrected))
@@ -159,7 +159,7 @@ class LogScans:
         self._recent = {}
         wanted = self.numbers[:n].tolist()
         j = read = 0
-        records = iter(self.reader)
+        records = iter(self.open_log())
         try:
             while True:
                 wall, cpu = time.perf_counter(), time.process_time()
@@ -506,7 +506,7 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         skips = io.StringIO()  # a note each line: the command says them once its checks pass (a refused
         report_skipped(reader, stream=skips)  # run is its error alone)
         notes.extend(skips.getvalue().splitlines())
-    records = LogScans(reader, str(log), rows)
+    records = LogScans(lambda: read_log(log, **(read_options or {})), str(log), rows)
     del rows
     if not len(records):
         raise LmsbenchError(f"{log}: no laser scans found")
