@@ -12,9 +12,10 @@ import dataclasses
 import io
 import json
 import time
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Collection, Iterable
+from typing import Any, Callable, Collection, Iterable, Iterator, Sequence
 
 import numpy as np
 import yaml
@@ -29,6 +30,7 @@ from experiments.provenance import write_record
 from lms200.finite import printable
 from experiments.user_methods import scans_of
 from slam import SlamConfig, SlamResult, run_slam
+from slam.run import Column
 from slam.metrics import Alignment2D, ate, interpolate_poses, map_error, read_relations, relations_error, rpe
 
 #: Published mean absolute translational relation errors on MIT CSAIL (Kummerle et al. 2009) and
@@ -36,32 +38,257 @@ from slam.metrics import Alignment2D, ate, interpolate_poses, map_error, read_re
 MIT_ANCHORS = {"scan matching": 0.106, "GMapping": 0.049, "graph SLAM": 0.004, "raw odometry": 1.70}
 
 
+#: scans whose identity a pass of :class:`LogScans` keeps (:meth:`LogScans.index_of`): a user
+#: extractor's failure names its scan by it; the paper preset extracts ``slam.run.EXTRACT_BATCH`` at once
+RECENT_SCANS = 1024
+_NO_POSE = (np.nan, np.nan, np.nan)
+
+
+class _Poses:
+    """One pose kind (odometry, true, corrected) of each scan kept, appended as the log is read: numpy
+    blocks (:class:`slam.run.Column`) of (x, y, theta) rows, nan for none, made at the first pose seen."""
+
+    def __init__(self) -> None:
+        self.column: Column | None = None
+        self.size = 0
+
+    def append(self, pose: tuple[float, float, float] | None) -> None:
+        if pose is not None and self.column is None:
+            self.column = Column(np.float64, (3,))
+            for _ in range(self.size):
+                self.column.append(_NO_POSE)
+        if self.column is not None:
+            self.column.append(_NO_POSE if pose is None else pose)
+        self.size += 1
+
+    def taken(self) -> np.ndarray | None:
+        """(n, 3) x m, y m, theta rad, nan rows where a scan has none; None where no scan has one."""
+        return None if self.column is None else self.column.taken()
+
+
+@dataclass
+class ScanRows:
+    """What :class:`LogScans` holds of each scan kept, appended one scan at a time as :func:`load_input`
+    reads the log: its number in the log, stamp, a CRC-32 of its ranges, its beam geometry's row in
+    ``geometries`` (beams, angle_increment rad, range_max m) and its poses."""
+
+    numbers: Column = field(default_factory=lambda: Column(np.int64))
+    stamps: Column = field(default_factory=lambda: Column(np.float64))
+    crcs: Column = field(default_factory=lambda: Column(np.uint32))
+    shapes: Column = field(default_factory=lambda: Column(np.int32))
+    geometries: dict[tuple[int, float, float], int] = field(default_factory=dict)
+    odom: _Poses = field(default_factory=_Poses)
+    truth: _Poses = field(default_factory=_Poses)
+    corrected: _Poses = field(default_factory=_Poses)
+
+    def append(self, number: int, rec: Record) -> None:
+        scan = rec.scan
+        self.numbers.append(number)
+        self.stamps.append(scan.stamp)
+        self.crcs.append(_crc(scan))
+        self.shapes.append(self.geometries.setdefault((len(scan), float(scan.angle_increment), float(scan.range_max)),
+                                                      len(self.geometries)))
+        self.odom.append(rec.odom)
+        self.truth.append(rec.truth)
+        self.corrected.append(rec.corrected)
+
+    def __len__(self) -> int:
+        return self.numbers.size
+
+
+def _crc(scan: Any) -> int:  # noqa: ANN401 - an lms200.Scan
+    """A CRC-32 of a scan's ranges (float64 bytes): a pass that reads the log again checks it read the same scan."""
+    return zlib.crc32(np.ascontiguousarray(scan.ranges, dtype=np.float64).tobytes())
+
+
+class LogScans:
+    """The scans :func:`load_input` kept of a log, read again from it at each pass (``for rec in
+    scans``): a run holds one compact row a scan (its number in the log, stamp, beam geometry, poses
+    and a CRC-32 of its ranges: 48 to 96 B), not the scans (3.6 KB a scan of MIT CSAIL, 361 beams),
+    so that ``lmsbench slam`` keeps about what its SLAM runs keep (docs/slam.md, ``lmsbench slam``). A pass
+    reads the whole log up to its last scan kept with a reader of its own (``open_log()``; MIT CSAIL's 1,988
+    scans: 0.3 s), the reader's warnings unsaid (the first read said them), and raises LmsbenchError where
+    a scan differs from the first read's (stamp or ranges) or the log ends before it: the file changed.
+
+    Sized and re-iterable, as a list of the records was; ``scans[k]`` is a pass up to scan ``k``."""
+
+    def __init__(self, open_log: Callable[[], Iterable[Record]], where: str, rows: ScanRows | None = None) -> None:
+        rows = rows if rows is not None else ScanRows()
+        self.open_log, self.where = open_log, where  # a new reader for each pass: two passes at once share nothing
+        self.numbers: np.ndarray = rows.numbers.taken()  # the log's own scan number of each (from 0)
+        self.stamps: np.ndarray = rows.stamps.taken()  # s
+        self.crcs: np.ndarray = rows.crcs.taken()
+        self.shapes: np.ndarray = rows.shapes.taken()  # rows of ``geometries``
+        self.geometries: list[tuple[int, float, float]] = list(rows.geometries)  # (beams, angle_increment, range_max)
+        self.odom, self.truth, self.corrected = rows.odom.taken(), rows.truth.taken(), rows.corrected.taken()
+        self._recent: dict[int, int] = {}  # id(scan) -> its index, the last RECENT_SCANS scans given
+        self.read_seconds = self.read_cpu_seconds = 0.0  # wall-clock and CPU time the passes spent reading the log
+
+    def __len__(self) -> int:
+        return int(self.numbers.size)
+
+    def taken(self, keep: Sequence[int] | np.ndarray) -> "LogScans":
+        """These scans at the indices ``keep`` (in order), read from the same log."""
+        keep = np.asarray(keep, dtype=np.int64)
+        out = LogScans(self.open_log, self.where)
+        out.numbers, out.stamps, out.crcs, out.shapes = (a[keep] for a in (self.numbers, self.stamps, self.crcs, self.shapes))
+        out.geometries = self.geometries
+        out.odom, out.truth, out.corrected = (None if a is None else a[keep] for a in (self.odom, self.truth, self.corrected))
+        return out
+
+    def __iter__(self) -> Iterator[Record]:
+        return self._pass(len(self))
+
+    def __getitem__(self, k: int) -> Record:
+        if isinstance(k, bool) or not isinstance(k, (int, np.integer)):
+            raise TypeError(f"LogScans indices must be integers, got {type(k).__name__}")
+        k = int(k) + len(self) if k < 0 else int(k)
+        if not 0 <= k < len(self):
+            raise IndexError(f"scan index {k} out of range ({len(self)} scans)")
+        for rec in self._pass(k + 1):
+            last = rec
+        return last
+
+    def _pass(self, n: int) -> Iterator[Record]:
+        """The first ``n`` scans kept, read again from the log; the time spent reading and checking them is
+        added to ``read_seconds`` and ``read_cpu_seconds``."""
+        if n <= 0:
+            return
+        import warnings
+
+        self._recent = {}
+        wanted = self.numbers[:n].tolist()
+        j = read = 0
+        records = iter(self.open_log())
+        try:
+            while True:
+                wall, cpu = time.perf_counter(), time.process_time()
+                say = warnings.showwarning  # the reader's warnings unsaid: its first pass said them (_unsaid)
+                warnings.showwarning = _unsaid
+                try:
+                    rec = next(records, None)
+                finally:
+                    warnings.showwarning = say
+                if rec is not None and read == wanted[j] and (rec.scan.stamp != self.stamps[j]
+                                                             or _crc(rec.scan) != self.crcs[j]):
+                    raise LmsbenchError(
+                        f"{self.where}: scan {read} is not the one read before (its stamp {fixed(rec.scan.stamp)} s, "
+                        f"first read {fixed(self.stamps[j])} s, or its ranges differ): the file changed while the run "
+                        "read it (a SLAM run reads its log again for each pass over the scans); run again once no "
+                        "program writes it")
+                self.read_seconds += time.perf_counter() - wall
+                self.read_cpu_seconds += time.process_time() - cpu
+                if rec is None:
+                    break
+                k, read = read, read + 1
+                if k != wanted[j]:
+                    continue
+                self._recent.pop(id(rec.scan), None)
+                self._recent[id(rec.scan)] = j
+                if len(self._recent) > RECENT_SCANS:
+                    del self._recent[next(iter(self._recent))]
+                yield rec
+                j += 1
+                if j == n:
+                    return
+        finally:
+            close = getattr(records, "close", None)
+            if close is not None:
+                close()
+        raise LmsbenchError(f"{self.where}: ended after {read} records on reading it again, before its "
+                            f"scan {wanted[j]} read before: the file changed while the run read it (a SLAM run reads its "
+                            "log again for each pass over the scans); run again once no program writes it")
+
+    def index_of(self, scan: Any) -> int | None:  # noqa: ANN401 - an lms200.Scan
+        """The index of ``scan`` among these: by identity among the last RECENT_SCANS scans of the last
+        pass, else the first of its stamp (a driver's copy, e.g. a de-skewed one); None for neither."""
+        k = self._recent.get(id(scan))
+        if k is not None:
+            return k
+        stamp = getattr(scan, "stamp", None)
+        if not isinstance(stamp, float):
+            return None
+        hits = np.flatnonzero(self.stamps == stamp)
+        return int(hits[0]) if hits.size else None
+
+    def range_maxes(self) -> set[float]:
+        """The scans' range_max values (m)."""
+        return {self.geometries[g][2] for g in np.unique(self.shapes).tolist()}
+
+    def shapes_in_order(self) -> list[tuple[int, float]]:
+        """The scans' (beams, angle_increment rad), each once, in the order met."""
+        first = np.unique(self.shapes, return_index=True)[1]
+        return list(dict.fromkeys(self.geometries[int(self.shapes[i])][:2] for i in np.sort(first)))
+
+    def missing_odometry(self) -> int:
+        """How many of the scans have no odometry."""
+        return len(self) if self.odom is None else int(np.count_nonzero(np.isnan(self.odom[:, 0])))
+
+    def light(self) -> Iterator[Any]:
+        """Each scan as what :func:`slam.run.in_scale` reads of a record (``scan.stamp``, ``odom``, ``truth``,
+        ``corrected``), from the rows held: the log is not read."""
+        for i, stamp in enumerate(self.stamps.tolist()):
+            yield _Light(_Stamped(stamp), *(None if a is None or np.isnan(a[i, 0]) else tuple(a[i].tolist())
+                                            for a in (self.odom, self.truth, self.corrected)))
+
+
+@dataclass(frozen=True)
+class _Stamped:
+    stamp: float
+
+
+@dataclass(frozen=True)
+class _Light:
+    scan: _Stamped
+    odom: tuple[float, ...] | None
+    truth: tuple[float, ...] | None
+    corrected: tuple[float, ...] | None
+
+
+def _unsaid(*args: Any, **kwargs: Any) -> None:  # noqa: ANN401 - showwarning's arguments
+    """``warnings.showwarning`` while a pass of :class:`LogScans` reads a record: the reader's warnings are
+    not said again (a log's unknown PARAM line, its ranges in millimetres). The function is swapped for each
+    record, not the filters: a change of the filters makes Python say again a run's own warnings that it
+    says once."""
+
+
 @dataclass
 class SlamInput:
-    """What a SLAM run reads: the records and the references found beside them."""
+    """What a SLAM run reads: the scans kept of the input (read again from it at each pass:
+    :class:`LogScans`) and the references found beside them."""
 
     name: str
-    records: list[Record]
+    records: LogScans
     truth: np.ndarray | None = None  # (n, 4) t, x, y, theta of the reference poses (``reference``)
     walls: np.ndarray | None = None  # (k, 4) true wall segments, world frame
     relations: np.ndarray | None = None  # (m, 5) t1, t2, x, y, yaw
     sources: dict[str, str] = field(default_factory=dict)
     reference: str = "ground truth"  # what ``truth`` holds: "ground truth", or "corrected poses" of a log
     time_increment: float | None = None  # s between beams as a bag's LaserScans give it (BagReadStats)
-    numbers: list[int] = field(default_factory=list)  # each record's own scan number in the log (from 0); [] as 0, 1, ...
     notes: list[str] = field(default_factory=list)  # one line each on what the input lacks, for the command to print
+
+    @property
+    def numbers(self) -> list[int]:
+        """Each scan's own number in the log (from 0), a new list (``records.numbers`` is the array)."""
+        return self.records.numbers.tolist()
+
+    @property
+    def stamps(self) -> np.ndarray:
+        """(n,) each scan's stamp, s."""
+        return self.records.stamps
 
     def number(self, k: int) -> int:
         """The log's own scan number of record ``k`` (messages name a scan by it, docs/commands.md), not
         its index among the scans kept (``--every`` / ``--rate-hz`` / ``--max-scans``)."""
-        return self.numbers[k] if self.numbers else k
+        return int(self.records.numbers[k])
 
     @property
     def odometry(self) -> np.ndarray | None:
         """(n, 4) t, x, y, theta of the records' raw odometry, or None where any is missing."""
-        if not self.records or any(r.odom is None for r in self.records):
+        odom = self.records.odom
+        if not len(self.records) or odom is None or np.isnan(odom[:, 0]).any():
             return None
-        return np.array([(r.scan.stamp, *r.odom) for r in self.records], float)
+        return np.column_stack((self.records.stamps, odom))
 
 
 def _relations_beside(path: Path) -> Path | None:
@@ -243,10 +470,13 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     from features.registry import check_beams
     from slam.run import check_first_scan
 
-    records: list[Record] = []
-    numbers: list[int] = []  # the log's own scan number of each record kept
+    rows = ScanRows()  # one compact row a scan kept: the scans are read again at each pass (LogScans)
     reader = read_log(log, **(read_options or {}))
     first_stamp, last_stamp, n_read, timed = None, None, 0, False  # timed: some scan read has another stamp than the first
+    kept_stamp = None  # the stamp of the last scan kept
+    from lms200.units import UnitsTally
+
+    tally, valid = UnitsTally(), False  # the scans kept: their units (all of them), a valid beam in some
     for k, rec in enumerate(reader):
         n_read += 1
         if first_stamp is None:
@@ -254,18 +484,21 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         timed = timed or rec.scan.stamp != first_stamp
         last_stamp = rec.scan.stamp
         if rate_hz is not None:
-            keep = not records or rec.scan.stamp >= records[-1].scan.stamp + 1.0 / rate_hz - 1e-9
+            keep = kept_stamp is None or rec.scan.stamp >= kept_stamp + 1.0 / rate_hz - 1e-9
         else:
             keep = k % every == 0
         if keep:
             # the extractors' limit (extract refuses it at that scan, after the notes on the input), named
             # by the log's own scan number (counted from 0), not the kept scan's
             check_beams(rec.scan, f"{log}: scan {k}")
-            if config is not None and not records:
+            if config is not None and not len(rows):
                 check_first_scan(rec.scan, config, f"{log}: scan {k}")
-            records.append(rec)
-            numbers.append(k)
-            if max_scans is not None and len(records) >= max_scans:
+            rows.append(k, rec)
+            kept_stamp = rec.scan.stamp
+            if not valid:
+                valid = bool(rec.scan.valid.any())
+                tally.add(rec.scan)
+            if max_scans is not None and len(rows) >= max_scans:
                 break
     if getattr(reader, "stats", None) is not None and (reader.stats.skipped or reader.stats.stopped):
         from experiments.logargs import report_skipped
@@ -273,7 +506,9 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         skips = io.StringIO()  # a note each line: the command says them once its checks pass (a refused
         report_skipped(reader, stream=skips)  # run is its error alone)
         notes.extend(skips.getvalue().splitlines())
-    if not records:
+    records = LogScans(lambda: read_log(log, **(read_options or {})), str(log), rows)
+    del rows
+    if not len(records):
         raise LmsbenchError(f"{log}: no laser scans found")
     if n_read > 1 and not timed:  # it ran: every step predicted no motion and searched no turn
         raise LmsbenchError(f"{log}: all {n_read} scans read have the same stamp ({fixed(first_stamp)} s); SLAM's "
@@ -284,12 +519,10 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
                             f"{fixed(last_stamp)} s); SLAM needs two or more")
     if len(records) == 1:  # it ran and reported a healthy run of no step (matched fraction 1 of 0 steps)
         raise LmsbenchError(f"{log}: holds one scan (stamp {fixed(first_stamp)} s); SLAM needs two or more")
-    if not any(r.scan.valid.any() for r in records):
-        from lms200.units import units_evidence
-
+    if not valid:
         # ranges in millimetres: the error says so (the reader's units warning is held by the command's checks:
-        # it said that warning, then this error, two lines for a user error)
-        mm = units_evidence(r.scan for r in records)
+        # it said that warning, then this error, two lines for a user error); the tally holds every scan kept
+        mm = tally.evidence()
         if mm is not None:
             raise LmsbenchError(f"{log}: none of its {len(records)} scans has a valid beam, nothing to localise "
                                 f"against: {mm}")
@@ -303,11 +536,11 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     sources["scans_kept"] = (f"{len(records)} of the {n_read} read: {chosen}"
                              + (f", at most {max_scans} (--max-scans)" if max_scans is not None else ""))
     if truth is not None:  # groundtruth.tum: its scores need it beside the scans (see _check_truth_span)
-        _check_truth_span(truth, records, sources["truth"])
+        _check_truth_span(truth, records.stamps, sources["truth"])
     if rel is not None:
         try:
-            _check_relations_span(rel, records, sources["relations"], max_scans if len(records) == max_scans else None,
-                                  reader.last_stamp)
+            _check_relations_span(rel, records.stamps, sources["relations"],
+                                  max_scans if len(records) == max_scans else None, reader.last_stamp)
         except LmsbenchError as exc:
             if relations:  # given: the user's mistake, said before the run
                 raise
@@ -316,36 +549,42 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
             notes.append(f"{exc} -- found beside the log, not given: the run goes on without it")
             rel = None
             del sources["relations"]
-    if truth is None and all(r.truth is not None for r in records):
-        truth = np.array([(r.scan.stamp, *r.truth) for r in records], float)
+    if truth is None and records.truth is not None and not np.isnan(records.truth[:, 0]).any():
+        truth = np.column_stack((records.stamps, records.truth))
         sources["truth"] = f"{log} (TRUEPOS)"
     reference = "ground truth"
-    if truth is None and all(r.corrected is not None for r in records):  # a Radish corrected log: its odometry
-        truth = np.array([(r.scan.stamp, *r.corrected) for r in records], float)  # is the ODOM lines' (raw)
+    if truth is None and records.corrected is not None and not np.isnan(records.corrected[:, 0]).any():
+        # a Radish corrected log: its odometry is the ODOM lines' (raw)
+        truth = np.column_stack((records.stamps, records.corrected))
         sources["truth"] = f"{log} (corrected poses: the log's own SLAM solution, not ground truth)"
         reference = "corrected poses"
     time_increment = getattr(getattr(reader, "stats", None), "time_increment", None)  # bags only
     return SlamInput(p.name, records, truth, walls, rel, sources, reference,
-                     time_increment if isinstance(time_increment, float) else None, numbers, notes)
+                     time_increment if isinstance(time_increment, float) else None, notes)
 
 
-def _check_truth_span(truth: np.ndarray, records: list[Record], where: str) -> None:
+def _stamps_of(records: np.ndarray | Iterable[Record]) -> np.ndarray:
+    """The stamps (s) of ``records`` (records, or their stamps already)."""
+    return records if isinstance(records, np.ndarray) else np.array([r.scan.stamp for r in records])
+
+
+def _check_truth_span(truth: np.ndarray, records: np.ndarray | Iterable[Record], where: str) -> None:
     """LmsbenchError naming the truth file, before any work, when fewer than two of the scans kept
     lie within its time span (the ATE interpolates the truth at the scans' stamps and leaves the
     others out). A groundtruth.tum of another run, or shifted by 100 s, ran the whole SLAM, wrote
     its trajectory and map, then failed: "ate: fewer than 2 estimated poses fall inside the ground
     truth's time span", exit 2, no file named, no metrics.json (the wrong-input hunt)."""
     # (a groundtruth.tum of comments or of nothing, "internal error: IndexError" here once: read_tum refuses it)
-    stamps = np.array([r.scan.stamp for r in records])
+    stamps = _stamps_of(records)
     t0, t1 = float(truth[0, 0]), float(truth[-1, 0])
     inside = int(np.count_nonzero((stamps >= t0) & (stamps <= t1)))
     if inside < 2:
-        raise LmsbenchError(f"{where}: its stamps ({fixed(t0)} to {fixed(t1)} s) cover {inside} of the {len(records)} scans "
+        raise LmsbenchError(f"{where}: its stamps ({fixed(t0)} to {fixed(t1)} s) cover {inside} of the {len(stamps)} scans "
                             f"to run on ({fixed(stamps[0])} to {fixed(stamps[-1])} s); scoring against it needs two or more "
                             "(the ground truth of another run, or stamps of another clock?)")
 
 
-def _check_relations_span(relations: np.ndarray, records: list[Record], where: str, cut: int | None,
+def _check_relations_span(relations: np.ndarray, records: np.ndarray | Iterable[Record], where: str, cut: int | None,
                           log_end: Callable[..., float | None] | None = None) -> None:
     """LmsbenchError naming the relations file, before any work, when none of its relations lies within
     the time span of the scans to run on (both stamps: the relations error scores no other), as
@@ -358,8 +597,9 @@ def _check_relations_span(relations: np.ndarray, records: list[Record], where: s
     relations past the cut but within the log are left to the run's note and warning, and relations
     outside the whole log are refused as without the cut (they passed whenever they lay after the cut: another log's relations
     ran the whole SLAM under --max-scans, exit 0). Where the log's last stamp cannot be told
-    (``log_end`` None or giving None), relations after the last scan read pass as the log's own, perhaps."""
-    stamps = np.array([r.scan.stamp for r in records])
+    (``log_end`` None or giving None), relations after the last scan read pass as the log's own, perhaps.
+    ``records``: the scans to run on, or their stamps (s)."""
+    stamps = _stamps_of(records)
     lo, hi = float(stamps.min()), float(stamps.max())
     t1, t2 = relations[:, 0], relations[:, 1]
 
@@ -378,11 +618,11 @@ def _check_relations_span(relations: np.ndarray, records: list[Record], where: s
     if cut is not None and last > hi and (end is None or within(max(end, hi))):  # past the cut: the log's own (the run warns)
         return
     if cut is None:
-        scans = f"the log's {len(records)} scans to run on {fixed(lo)} to {fixed(hi)} s"
+        scans = f"the log's {len(stamps)} scans to run on {fixed(lo)} to {fixed(hi)} s"
     elif end is not None:
-        scans = f"the whole log's scans {fixed(lo)} to {fixed(max(end, hi))} s ({len(records)} of them read, --max-scans)"
+        scans = f"the whole log's scans {fixed(lo)} to {fixed(max(end, hi))} s ({len(stamps)} of them read, --max-scans)"
     else:
-        scans = f"the {len(records)} scans read (at most {cut}, --max-scans) {fixed(lo)} to {fixed(hi)} s"
+        scans = f"the {len(stamps)} scans read (at most {cut}, --max-scans) {fixed(lo)} to {fixed(hi)} s"
     raise LmsbenchError(f"{where}: none of its {len(relations)} relations lies within the scans' time span: the relations "
                         f"span {fixed(first)} to {fixed(last)} s, {scans}; the relations "
                         "error would score nothing (the relations of another log, or stamps of another clock?)")
@@ -474,10 +714,11 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     :func:`earlier_run_files` tells an earlier lmsbench slam run wrote (a user's own metrics.json
     and slam.png in --out were deleted).
     """
-    t0, c0 = time.perf_counter(), time.process_time()
-    with scans_of(data.name, data.records, data.numbers):  # a user's --extractor MODULE:FUNCTION that fails names its scan
+    scans = data.records
+    t0, c0 = _clocks(scans)  # the SLAM's own time: the passes' reading of the log is taken out (_since)
+    with scans_of(data.name, data.records, data.records.numbers):  # a user's --extractor MODULE:FUNCTION that fails names its scan
         result = _quiet_bounds(_bar(data.records, "slam", progress), config)
-    seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
+    seconds, cpu = _since(scans, t0, c0)
     if out is not None:
         # an earlier run's outputs, all but the config.yaml written over whole next, so that no stop leaves one of
         # them beside this run's files; records (map.json, metrics.json) last (options.Owner.remove_earlier)
@@ -496,14 +737,14 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
         if progress:
             say_on_terminal(f"slam: baseline: the paper preset (EKF) over the same {len(data.records)} scans, for the "
                             "comparison table (--no-paper-baseline leaves it out) ...")
-        t1, c1 = time.perf_counter(), time.process_time()
+        t1, c1 = _clocks(scans)
         paper_config = dataclasses.replace(config, preset="paper")  # the same motion input as the run
-        with scans_of(data.name, data.records, data.numbers):
+        with scans_of(data.name, data.records, data.records.numbers):
             paper = _quiet_bounds(_bar(data.records, "paper preset", progress), paper_config)
         say_bounds("the paper preset baseline", paper, paper_config)
         table.append({"source": _source_name(paper_config), **_flat(score(paper.trajectory, data, paper)),
-                      "cpu_scans_per_s": len(data.records) / max(time.process_time() - c1, 1e-9),
-                      "seconds": time.perf_counter() - t1})
+                      "cpu_scans_per_s": len(data.records) / max(_since(scans, t1, c1)[1], 1e-9),
+                      "seconds": _since(scans, t1, c1)[0]})
     odo = data.odometry
     if odo is not None:
         raw = _flat(score(odo, data))
@@ -514,13 +755,13 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
                 say_on_terminal(f"slam: baseline: the paper preset driven by the input's odometry over the same "
                                 f"{len(data.records)} scans, for the comparison table (--no-odometry-baseline leaves "
                                 "it out) ...")
-            t1 = time.perf_counter()
+            t1, c1 = _clocks(scans)
             odo_config = dataclasses.replace(config, preset="paper", motion=dataclasses.replace(config.motion, use_odometry=True))
-            with scans_of(data.name, data.records, data.numbers):
+            with scans_of(data.name, data.records, data.records.numbers):
                 with_odo = _quiet_bounds(_bar(data.records, "paper preset (odometry)", progress), odo_config)
             say_bounds("the paper preset (odometry) baseline", with_odo, odo_config)
             table.append({"source": "paper preset (odometry)", **_flat(score(with_odo.trajectory, data, with_odo)),
-                          "seconds": time.perf_counter() - t1})
+                          "seconds": _since(scans, t1, c1)[0]})
     consistency = {
         "diverged": bool(d["diverged"]),
         "diverged_at": d["diverged_at"],
@@ -555,7 +796,19 @@ def run(data: SlamInput, config: SlamConfig, progress: bool = True, odometry_bas
     return SlamRun(result, metrics, seconds)
 
 
-def _bar(records: list[Record], desc: str, progress: bool) -> Iterable[Record]:
+def _clocks(scans: LogScans) -> tuple[float, float]:
+    """The wall clock and the process's CPU time (s), less the time ``scans``' passes spent reading the log:
+    a run's time is its extraction's and SLAM's (:func:`_since`), as when the scans were held in memory."""
+    return time.perf_counter() - scans.read_seconds, time.process_time() - scans.read_cpu_seconds
+
+
+def _since(scans: LogScans, wall: float, cpu: float) -> tuple[float, float]:
+    """Wall-clock and CPU seconds since :func:`_clocks` gave ``wall`` and ``cpu``, the reading of the log left out."""
+    now_wall, now_cpu = _clocks(scans)
+    return now_wall - wall, now_cpu - cpu
+
+
+def _bar(records: LogScans, desc: str, progress: bool) -> Iterable[Record]:
     """``records`` behind a progress bar named ``desc`` on a terminal (with ``progress``), gone
     when done (the summary says the times)."""
     if not progress:
@@ -644,7 +897,7 @@ def write_config(out: Path, data: SlamInput, config: SlamConfig) -> None:
     extractor = resolved_configs([config.extractor], {config.extractor: config.extractor_params})[config.extractor]
     # sigma_r given for cm-mode scans (or sigma_r_cm for mm-mode ones) was recorded as if it ran
     extractor = unread_marked(extractor, make_config(config.extractor, **config.extractor_params),
-                              {float(r.scan.range_max) for r in data.records}, config.extractor_params)
+                              data.records.range_maxes(), config.extractor_params)
     records = {"extractor_config": extractor, "versions": versions()}
     assert tuple(records) == SLAM_RECORD_KEYS  # what slam --config reads past and --out tells the folder by
     write_record(out / "config.yaml", dump_yaml({"input": data.sources, "slam": config.to_dict(), **records},

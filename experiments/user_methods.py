@@ -28,7 +28,10 @@ import importlib.abc
 import importlib.machinery
 import os
 import sys
-from typing import Any, Callable, Iterator, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Iterator, Sequence
+
+if TYPE_CHECKING:
+    import numpy as np
 
 from lms200 import LmsbenchError
 from lms200.errors import one_line
@@ -61,22 +64,28 @@ class UserMethodFailed(UserMethodError):
         self.args = (one_line(self._message()),)  # one line, as LmsbenchError makes every message
         return self
 
-    def at_scan_of(self, source: str, scans: Sequence[Any], numbers: Sequence[int] | None = None) -> "UserMethodFailed":
+    def at_scan_of(self, source: str, scans: Iterable[Any], numbers: "Sequence[int] | np.ndarray | None" = None) -> "UserMethodFailed":
         """This error, naming its scan by its index in ``scans`` (scans or records, found by
         identity, else by stamp: a driver that passed copies, e.g. de-skewed ones), or by ``numbers``
-        at that index (the log's own scan number of each, where ``scans`` are some of a log's)."""
-        items = [getattr(s, "scan", s) for s in scans]
-        k = next((i for i, s in enumerate(items) if s is self.scan), None)
+        at that index (the log's own scan number of each, where ``scans`` are some of a log's). A
+        ``scans`` that finds a scan itself (``index_of``: ``experiments.slamrun.LogScans``, which holds no
+        scan) is asked, not read through."""
         stamp = getattr(self.scan, "stamp", None)
-        if k is None and stamp is not None:
-            k = next((i for i, s in enumerate(items) if getattr(s, "stamp", None) == stamp), None)
-        if k is not None and numbers:
-            k = numbers[k]
+        index_of = getattr(scans, "index_of", None)
+        if index_of is not None:
+            k = index_of(self.scan)
+        else:
+            items = [getattr(s, "scan", s) for s in scans]
+            k = next((i for i, s in enumerate(items) if s is self.scan), None)
+            if k is None and stamp is not None:
+                k = next((i for i, s in enumerate(items) if getattr(s, "stamp", None) == stamp), None)
+        if k is not None and numbers is not None and len(numbers):
+            k = int(numbers[k])
         return self.at(source, k) if k is not None else self
 
 
 @contextlib.contextmanager
-def scans_of(source: str, scans: Sequence[Any], numbers: Sequence[int] | None = None) -> Iterator[None]:
+def scans_of(source: str, scans: Iterable[Any], numbers: "Sequence[int] | np.ndarray | None" = None) -> Iterator[None]:
     """Within it, a user extractor's failure names its scan by its index in ``scans`` (scans or
     records) of ``source``, or by ``numbers`` at that index (the log's own scan numbers): for a driver
     that hands a whole run to a library call (``run_slam``)."""

@@ -246,7 +246,7 @@ def _refuse_paper_settings(args: argparse.Namespace, cfg: "SlamConfig", why: str
 
 def _odometry_lack(data: Any) -> str:
     """How an input (``data.records``) lacks the odometry on every scan that an odometry baseline needs."""
-    missing = sum(r.odom is None for r in data.records)
+    missing = data.records.missing_odometry()
     return "has no odometry" if missing == len(data.records) else f"has none on {missing} of its {len(data.records)} scans"
 
 
@@ -267,17 +267,18 @@ def _refuse_unread_sections(cfg: "SlamConfig", sections: tuple[str, ...], where:
         raise InputError(f"{where}: {shown} set{'s' if len(changed) == 1 else ''} {what}")
 
 
-def _warn_unread(config: "SlamConfig", records: list, where: Any, said: list[str]) -> None:
+def _warn_unread(config: "SlamConfig", range_maxes: set[float], where: Any, said: list[str]) -> None:
     """A warning line per extractor field of the run (``extractor_params``: --config, --set) that no
     scan reads: ``sigma_r: 0.02`` (configs/slam-mit-csail.yaml) ran bit for bit as the defaults on
-    the cm-mode MIT CSAIL log, whose scans read sigma_r_cm, and nothing said so."""
+    the cm-mode MIT CSAIL log, whose scans read sigma_r_cm, and nothing said so. ``range_maxes``: the
+    scans' range_max values (m)."""
     from features.registry import make_config
 
     from features.registry import unread_fields
 
     configs = {config.extractor: make_config(config.extractor, **config.extractor_params)}
     for line in unread_fields({config.extractor: config.extractor_params}, configs,
-                              sorted({float(r.scan.range_max) for r in records}), f"the scans of {Path(str(where)).name}"):
+                              sorted(range_maxes), f"the scans of {Path(str(where)).name}"):
         said.append(f"lmsbench slam: warning: {line}")
 
 
@@ -311,12 +312,13 @@ def _check_input(path: Path) -> None:
     check_log(path)  # a simulate folder's scans.clf, a bag folder or a log file
 
 
-def _not_lms200_shape(records: list) -> str | None:
-    """The first scan shape among ``records`` that no LMS200 takes (``lms200.timing.lms200_shaped``),
-    described ("1081 beams at 0.25 deg over 270 deg"), or None."""
+def _not_lms200_shape(shapes: list[tuple[int, float]]) -> str | None:
+    """The first scan shape of ``shapes`` (beams, angle_increment rad: the scans', each once, in the order
+    met) that no LMS200 takes (``lms200.timing.lms200_shaped``), described ("1081 beams at 0.25 deg over
+    270 deg"), or None."""
     from lms200.timing import lms200_shaped
 
-    for n, inc in dict.fromkeys((len(r.scan), float(r.scan.angle_increment)) for r in records):
+    for n, inc in shapes:
         if not lms200_shaped(n, inc):
             deg = np.degrees(inc)
             return f"{n} beams at {deg:.4g} deg over {(n - 1) * deg:.4g} deg"
@@ -351,8 +353,8 @@ def run(args: argparse.Namespace) -> int:
                           read_options=read_log_options(args), config=config)
         for note in data.notes:
             said.append(note)
-        _warn_unread(config, data.records, data.sources.get("scans", args.input), said)
-        stamps = [r.scan.stamp for r in data.records]
+        _warn_unread(config, data.records.range_maxes(), data.sources.get("scans", args.input), said)
+        stamps = data.stamps.tolist()
         back = next((k for k in range(1, len(stamps)) if stamps[k] < stamps[k - 1]), None)
         if back is not None:
             where = data.sources.get("scans", args.input)
@@ -364,8 +366,7 @@ def run(args: argparse.Namespace) -> int:
             kept = set(keep)
             for k in (k for k in range(len(stamps)) if k not in kept):
                 said.append(f"{where}: skipped scan {data.number(k)} (stamp {fixed(stamps[k])} s): out of time order")
-            data.records = [data.records[k] for k in keep]
-            data.numbers = [data.number(k) for k in keep]
+            data.records = data.records.taken(keep)
             if data.truth is not None and np.array_equal(data.truth[:, 0], stamps):  # a pose per scan (TRUEPOS)
                 data.truth = data.truth[keep]
             if len(data.records) < 2:  # it ran on the one scan left (load_input refuses a one-scan input)
@@ -375,9 +376,9 @@ def run(args: argparse.Namespace) -> int:
 
         # before any output (run_slam checks the same as it goes: a stamp 1e200 s after the one before or an
         # odometry of 1e300 m was an internal error after the run started)
-        for _ in in_scale(data.records, f"{data.sources.get('scans', args.input)}: scan {{k}}", data.numbers):
+        for _ in in_scale(data.records.light(), f"{data.sources.get('scans', args.input)}: scan {{k}}", data.numbers):
             pass
-        stamps = [r.scan.stamp for r in data.records]
+        stamps = data.stamps.tolist()
         still = [k for k in range(1, len(stamps)) if stamps[k] == stamps[k - 1]]
         if still:  # each such step predicts no motion and searches no turn: kept (a coarse clock still works), said
             over = ("the motion model predicts no motion and the search no turn over them" if not config.motion.use_odometry
@@ -398,7 +399,7 @@ def run(args: argparse.Namespace) -> int:
                   "last pose with zero velocity after each")
         if config.motion.use_odometry and data.odometry is None:
             asked = "--odometry" if args.odometry else f"motion.use_odometry (in {args.config})"
-            missing = sum(r.odom is None for r in data.records)
+            missing = data.records.missing_odometry()
             has = "this input has none" if missing == len(data.records) else f"{missing} of the {len(data.records)} scans have none"
             raise LmsbenchError(f"{args.input}: {asked} needs odometry on every scan, and {has}")
         if args.no_odometry_baseline and data.odometry is None:  # it set nothing: the baseline runs only with odometry
@@ -413,7 +414,7 @@ def run(args: argparse.Namespace) -> int:
         config = deskew_for_sensor(config, interlaced=False)
         print(f"{args.input}: simulated with interlaced=False (every beam from one pose): alignment.deskew off",
               file=sys.stderr)
-    odd = _not_lms200_shape(data.records) if config.preset == "default" and config.alignment.deskew else None
+    odd = _not_lms200_shape(data.records.shapes_in_order()) if config.preset == "default" and config.alignment.deskew else None
     import dataclasses
 
     from slam.config import MAX_BEAM_TIME_INCREMENT_S
@@ -451,7 +452,7 @@ def run(args: argparse.Namespace) -> int:
           f"map lines; outputs in {args.out}")
     print("  " + _time_line(m, time.perf_counter() - started))
     if "loop_closures" in m:
-        lc, t0 = m["loop_closures"], data.records[0].scan.stamp
+        lc, t0 = m["loop_closures"], float(data.stamps[0])
         shown = ", ".join(f"{fixed(c['new_stamp'] - t0, 1)} s -> {fixed(c['old_stamp'] - t0, 1)} s" for c in lc["closed"][:6])
         more = ", ..." if lc["n"] > 6 else ""
         print(f"  {lc['n']} loop closures over {lc['n_keyframes']} keyframes" + (f" ({shown}{more})" if lc["n"] else ""))

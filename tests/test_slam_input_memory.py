@@ -1,0 +1,75 @@
+"""``lmsbench slam``'s input stage keeps a compact row a scan, not the scans: ``load_input`` held every
+record of the log (4.0 KB a scan of 361 beams, 10x what the SLAM run keeps), now it keeps stamps, numbers,
+poses and a CRC of the ranges, and each pass over ``data.records`` reads the log again."""
+
+from __future__ import annotations
+
+import tracemalloc
+
+import numpy as np
+import pytest
+
+from experiments.slamrun import load_input
+from lms200 import LmsbenchError
+
+N_SCANS = 800
+BEAMS = 181
+
+
+def _flaser(k: int, stamp: float, beams: int = BEAMS) -> str:
+    ranges = " ".join(f"{2.0 + 0.01 * ((k + b) % 97):.2f}" for b in range(beams))
+    return f"FLASER {beams} {ranges} {0.01 * k:.4f} 0 0 {0.01 * k:.4f} 0 0 {stamp:.6f} host {stamp:.6f}\n"
+
+
+@pytest.fixture(scope="module")
+def long_log(tmp_path_factory):
+    path = tmp_path_factory.mktemp("memory") / "long.clf"
+    path.write_text("".join(_flaser(k, 10.0 + 0.1 * k) for k in range(N_SCANS)))
+    return path
+
+
+def test_the_input_stage_keeps_a_compact_row_a_scan(long_log, monkeypatch):
+    """Peak traced memory of load_input and of a pass over its records, per scan: the records' ranges
+    alone are 181 * 8 = 1,448 B a scan (the list of records load_input held peaked at 2.1 KB a scan
+    here); the rows held are 48 B a scan with odometry, and a pass holds a scan at a time. The rows'
+    numpy blocks are cut to 256 rows (4,096: ~200 KB whatever the log, the most of 800 scans' peak)."""
+    from slam.run import Column
+
+    monkeypatch.setattr(Column, "BLOCK_ROWS", 256)
+    tracemalloc.start()
+    try:
+        data = load_input(long_log)
+        loaded = tracemalloc.get_traced_memory()[1]
+        tracemalloc.reset_peak()
+        base = tracemalloc.get_traced_memory()[0]
+        stamps = [rec.scan.stamp for rec in data.records]
+        passed = tracemalloc.get_traced_memory()[1] - base
+    finally:
+        tracemalloc.stop()
+    # about what a SLAM run keeps a scan (slam.run.MAX_SLAM_SCANS: 356 B at its peak, the default preset)
+    assert loaded / N_SCANS < 400, f"load_input peaked at {loaded / N_SCANS:.0f} B a scan"
+    # the pass: the stamps list itself (~32 B a scan) and the reader's own buffers, no scan kept
+    assert passed / N_SCANS < 400, f"a pass over the records peaked at {passed / N_SCANS:.0f} B a scan"
+    assert len(data.records) == N_SCANS and data.numbers[-1] == N_SCANS - 1
+    assert stamps == [float(f"{10.0 + 0.1 * k:.6f}") for k in range(N_SCANS)]  # the stamps as written
+    np.testing.assert_array_equal(data.stamps, stamps)
+    assert data.odometry is not None and data.odometry[-1, 1] == pytest.approx(0.01 * (N_SCANS - 1))
+
+
+def test_a_log_changed_between_passes_is_refused(tmp_path):
+    """A pass reads the log again: a scan that is not the one read first (its ranges rewritten in place,
+    or the log cut) is an error naming the file, not a run on other scans than the checks saw."""
+    path = tmp_path / "log.clf"
+    path.write_text("".join(_flaser(k, 10.0 + 0.1 * k, 11) for k in range(20)))
+    data = load_input(path, every=2)
+    assert [r.scan.stamp for r in data.records] == pytest.approx(10.0 + 0.2 * np.arange(10))
+    assert data.records[-1].scan.stamp == pytest.approx(11.8) and data.records[3].scan.stamp == pytest.approx(10.6)
+    lines = path.read_text().splitlines(keepends=True)
+    path.write_text("".join(lines[:6]) + _flaser(7, 10.6, 11) + "".join(lines[7:]))  # scan 6's ranges: scan 7's
+    with pytest.raises(LmsbenchError, match=r"log.clf: scan 6 is not the one read before \(its stamp 10.600000 s, "
+                                            r"first read 10.600000 s, or its ranges differ\): the file changed"):
+        list(data.records)
+    path.write_text("".join(lines[:9]))
+    with pytest.raises(LmsbenchError, match=r"log.clf: ended after 9 records on reading it again, before its scan 10 "
+                                            r"read before: the file changed"):
+        list(data.records)
