@@ -14,12 +14,16 @@ import argparse
 import math
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
 from experiments.options import DURATION, MAX_DURATION_S, SEED, OneLineParser, check_out, number, path_arg
 from experiments.provenance import write_parquet
+
+if TYPE_CHECKING:
+    from experiments.slamrun import SlamInput
 
 MIT_LOG = Path(__file__).resolve().parents[2] / "shared" / "data" / "carmen" / "mit-csail.clf.gz"
 
@@ -80,16 +84,30 @@ def long_run(seed: int, duration: float, rate: float) -> pd.DataFrame:
                           "cpu_scans_per_s": len(records) / cpu}])
 
 
-def mit_rows(path: Path, presets: list[str], inflations: tuple[float, ...] = (3.0, 10.0)) -> pd.DataFrame:
-    """Relations error (mean, std, median, long > 200 s) per preset on MIT CSAIL, and of the
-    default preset with other ``alignment.covariance_inflation`` values (robustness: the keyframe
+def read_mit(path: Path) -> SlamInput:
+    """The MIT CSAIL log at ``path``, read whole, with its relations (``NAME.relations`` beside it).
+
+    Raises:
+        LmsbenchError: not a log (``options.check_log``, then the reader), or no relations beside it
+            (:func:`mit_rows` scores against them: it failed after the runs, a TypeError traceback)."""
+    from experiments.options import InputError, check_log
+    from experiments.slamrun import load_input
+
+    data = load_input(check_log(path))
+    if data.relations is None:
+        raise InputError(f"--mit {path}: no relations file beside it (NAME.relations), which the relations error "
+                         "is scored against")
+    return data
+
+
+def mit_rows(data: SlamInput, presets: list[str], inflations: tuple[float, ...] = (3.0, 10.0)) -> pd.DataFrame:
+    """Relations error (mean, std, median, long > 200 s) per preset on MIT CSAIL (``data``, :func:`read_mit`),
+    and of the default preset with other ``alignment.covariance_inflation`` values (robustness: the keyframe
     and closure factors both take their noise from their matches, so one global factor should not
     move the result)."""
-    from experiments.slamrun import load_input
     from slam import SlamConfig
     from slam.metrics import interpolate_poses, relative
 
-    data = load_input(path)
     rows = []
     # the extractor at its defaults: sigma_r 0.02 was given here "for the cm-mode ranges", which read
     # sigma_r_cm ("auto") instead, so the runs were the defaults' bit for bit
@@ -209,12 +227,16 @@ def _run(args: argparse.Namespace) -> int:
     """The evaluation of the parsed options: the tables, written into ``args.out``, whose earlier run's
     outputs (all ``check_out`` let it hold) are removed first: one this run does not write (long.parquet
     under `--long 0`, mit.parquet without the log) stayed beside the new tables as if it were this run's."""
+    # the log read (and so checked) whole before anything is removed: a --mit file that was no log was
+    # refused after the earlier run's outputs (hours of runs) were gone
+    data = read_mit(args.mit) if args.mit.exists() else None
     args.out.mkdir(parents=True, exist_ok=True)
     for name in OUTPUTS:  # before any is written, as options.Owner.remove_earlier: a stopped run leaves no mix
         (args.out / name).unlink(missing_ok=True)
     md = []
-    if args.mit.exists():
-        mit = mit_rows(args.mit, ["paper", "default"])
+    if data is not None:
+        mit = mit_rows(data, ["paper", "default"])
+        del data  # its scans are not held through the other runs
         write_parquet(mit, args.out / "mit.parquet")
         md += [_md(mit), ""]
     if args.long > 0:

@@ -261,6 +261,27 @@ def test_the_slam_evaluation_leaves_only_its_own_outputs(tmp_path: Path, capsys:
     assert (out / "tables.md").read_text().strip() in capsys.readouterr().out
 
 
+def test_the_slam_evaluation_reads_its_log_before_it_removes_an_earlier_runs_outputs(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A --mit file that is no log (or a log without its relations, a TypeError traceback after the runs) was
+    refused after the folder's earlier outputs, hours of runs, were removed: it is read first, and they stay."""
+    from experiments import slameval
+
+    out = tmp_path / "eval"
+    out.mkdir()
+    for name in slameval.OUTPUTS:
+        (out / name).write_text("an earlier run's\n")
+    bad, bare = tmp_path / "bad.log", tmp_path / "bare.log"
+    bad.write_text("hello\n")
+    bare.write_text("".join(f"FLASER 181 {' '.join(['2.00'] * 181)} 0 0 0 0 0 0 {t:g} host {t:g}\n" for t in (0, 0.2, 0.4)))
+    for log, says in [(bad, f"{bad}: not a CARMEN log"), (bare, f"--mit {bare}: no relations file beside it")]:
+        with pytest.raises(SystemExit) as stop:
+            slameval.main(["--out", str(out), "--seeds", "0", "--long", "0", "--mit", str(log)])
+        assert stop.value.code == 2
+        assert capsys.readouterr().err.startswith(f"python -m experiments.slameval: error: {says}")
+        assert {p.name: p.read_text() for p in out.iterdir()} == dict.fromkeys(slameval.OUTPUTS, "an earlier run's\n")
+
+
 def test_a_missing_input_names_the_file_it_was_likely_meant_to_be(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
                                                                    capsys: pytest.CaptureFixture[str]) -> None:
     """`lmsbench info ../shared/data/carmen/mit-csail.clf` (the file is mit-csail.clf.gz) said
