@@ -108,6 +108,9 @@ def mit_rows(data: SlamInput, presets: list[str], inflations: tuple[float, ...] 
     from slam import SlamConfig
     from slam.metrics import interpolate_poses, relative
 
+    rel = data.relations
+    if rel is None:  # read_mit refuses such a log
+        raise ValueError("mit_rows: the log has no relations to score against")
     rows = []
     # the extractor at its defaults: sigma_r 0.02 was given here "for the cm-mode ranges", which read
     # sigma_r_cm ("auto") instead, so the runs were the defaults' bit for bit
@@ -118,7 +121,6 @@ def mit_rows(data: SlamInput, presets: list[str], inflations: tuple[float, ...] 
                  for f in inflations]
     for preset, cfg in runs:
         result, cpu = _timed(data.records, cfg, repeats=2 if preset == "default" else 1)
-        rel = data.relations
         p1, _ = interpolate_poses(result.trajectory, rel[:, 0])
         p2, _ = interpolate_poses(result.trajectory, rel[:, 1])
         err = relative(rel[:, 2:5], relative(p1, p2))
