@@ -2,8 +2,9 @@
 run's consistency (NEES), and MIT CSAIL (relations error), paper preset against the default.
 
 ``python -m experiments.slameval --out results/slam-eval [--seeds 0-20] [--mit PATH]`` writes
-sim.parquet, mit.parquet (where the log is), long.parquet (unless ``--long 0``) and tables.md (markdown),
-an earlier run's in the folder removed first. Speeds are CPU time
+slameval.yaml (its settings, first), sim.parquet, mit.parquet (where the log is), long.parquet (unless
+``--long 0``) and tables.md (markdown), an earlier run's in the folder (told by its slameval.yaml) removed
+first, a file of these names no earlier run wrote refused. Speeds are CPU time
 (``time.process_time``) of ``run_slam`` (feature extraction included), one process, one core, the
 best of 3 runs on the simulated runs and of 2 for the default preset on MIT CSAIL.
 """
@@ -19,8 +20,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pandas as pd
 
-from experiments.options import DURATION, MAX_DURATION_S, SEED, OneLineParser, check_out, number, path_arg
-from experiments.provenance import write_parquet
+from experiments.options import (DURATION, MAX_DURATION_S, SEED, SLAMEVAL_OWNER, OneLineParser, OutTree, check_out,
+                                 number, path_arg)
+from experiments.provenance import versions, write_parquet, write_record
+from lms200.yamlio import dump as dump_yaml
 
 if TYPE_CHECKING:
     from experiments.slamrun import SlamInput
@@ -180,7 +183,9 @@ _long.__name__ = "number"
 
 
 RATES_HZ = (37.5, 5.0)  # the simulated runs' rates: the LMS200's and decimated
-OUTPUTS = ("sim.parquet", "mit.parquet", "long.parquet", "tables.md")  # what --out receives
+#: what --out receives: slameval.yaml first, whole (it tells the folder as this script's: options.SLAMEVAL_OWNER)
+RECORD = "slameval.yaml"
+OUTPUTS = (RECORD, "sim.parquet", "mit.parquet", "long.parquet", "tables.md")
 #: the simulated runs' sensor, ``sim.SensorConfig()``'s: 361 beams 0.5 deg apart (a test holds them to it:
 #: importing the simulator to read them took 0.5 s of every parser build, ``--help`` and refusals included)
 SIM_BEAMS, SIM_RESOLUTION_RAD = 361, math.radians(0.5)
@@ -207,7 +212,7 @@ def main(argv: list[str] | None = None) -> int:
     from lms200 import LmsbenchError
 
     ap = OneLineParser(prog="python -m experiments.slameval", description=" ".join(__doc__.split("\n\n")[0].split()))
-    ap.add_argument("--out", type=path_arg, required=True, help="folder for sim.parquet, mit.parquet, long.parquet, tables.md")
+    ap.add_argument("--out", type=path_arg, required=True, help="folder for slameval.yaml, sim.parquet, mit.parquet, long.parquet, tables.md")
     ap.add_argument("--seeds", type=_seeds, default="0-20",
                     help=f"simulated office runs, a seed or a range LO-HI, at most {MAX_SEEDS} (default 0-20)")
     shortest = min_duration()
@@ -218,23 +223,35 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--long", type=_long, default=900.0, help="duration (s) of the consistency run (default 900; 0: none)")
     args = ap.parse_args(argv)
     try:  # a user error is one line, exit 2, as the CLI's (an existing file as --out was a FileExistsError traceback)
-        check_out(args.out, OUTPUTS)
+        check_out(args.out, OUTPUTS, owner=SLAMEVAL_OWNER)  # only an earlier run's files are replaced
         return _run(args)
     except LmsbenchError as exc:
         ap.error(str(exc))
     return 2
 
 
+def record(args: argparse.Namespace) -> str:
+    """slameval.yaml: the run's settings and versions, which tell its folder as this script's."""
+    seeds = f"{args.seeds[0]}-{args.seeds[-1]}" if len(args.seeds) > 1 else str(args.seeds[0])
+    return ("# what wrote this folder; python -m experiments.slameval --out replaces its files only beside this record\n"
+            + dump_yaml({"command": "python -m experiments.slameval", "seeds": seeds, "duration_s": args.duration,
+                         "long_s": args.long, "mit": str(args.mit) if args.mit.exists() else None,
+                         "versions": versions()}, sort_keys=False))
+
+
 def _run(args: argparse.Namespace) -> int:
     """The evaluation of the parsed options: the tables, written into ``args.out``, whose earlier run's
-    outputs (all ``check_out`` let it hold) are removed first: one this run does not write (long.parquet
-    under `--long 0`, mit.parquet without the log) stayed beside the new tables as if it were this run's."""
+    outputs (all ``check_out`` let it hold: beside that run's slameval.yaml) are removed first: one this run
+    does not write (long.parquet under `--long 0`, mit.parquet without the log) stayed beside the new tables
+    as if it were this run's."""
     # the log read (and so checked) whole before anything is removed: a --mit file that was no log was
     # refused after the earlier run's outputs (hours of runs) were gone
     data = read_mit(args.mit) if args.mit.exists() else None
     args.out.mkdir(parents=True, exist_ok=True)
-    for name in OUTPUTS:  # before any is written, as options.Owner.remove_earlier: a stopped run leaves no mix
-        (args.out / name).unlink(missing_ok=True)
+    # before any is written: a stopped run leaves no mix; only the files an earlier run's record tells as its own
+    # (check_out refused any other: a user's long.parquet in the folder was removed by its name alone)
+    SLAMEVAL_OWNER.remove_earlier(args.out, OutTree(OUTPUTS), keep=(RECORD,))
+    write_record(args.out / RECORD, record(args))
     md = []
     if data is not None:
         mit = mit_rows(data, ["paper", "default"])
