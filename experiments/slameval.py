@@ -196,13 +196,25 @@ def min_duration(rates: tuple[float, ...] = RATES_HZ) -> float:
     fewest the ATE scores: `--duration 0.2` kept one at 5 scans/s and failed after the runs at 37.5 with
     a traceback ("ate: fewer than 2 estimated poses"). From the LMS200's timing (``lms200.timing``): a
     run's second scan kept at a rate is its every ``round(1 / (period * rate))``-th, as
-    ``sim.records.scan_stamps`` keeps them, and it ends with that scan's last beam."""
+    ``sim.records.scan_stamps`` keeps them, and it ends with that scan's last beam.
+
+    Raises:
+        LmsbenchError: a rate at which no run the simulator makes (``MAX_DURATION_S`` at most) keeps two
+            scans (below one scan an hour: it keeps the first alone; the 3600.02 s given for it was
+            longer than any run), or a rate that is not > 0."""
+    from lms200 import LmsbenchError
     from lms200.timing import beam_time_offsets, scan_period
 
     period = scan_period(SIM_RESOLUTION_RAD)
     last_beam = float(beam_time_offsets(SIM_BEAMS, SIM_RESOLUTION_RAD).max())
-    need = max(max(1, round(1.0 / (period * rate))) * period for rate in rates) + last_beam
-    return math.ceil(need * 100 - 1e-6) / 100
+    needs = []
+    for rate in rates:
+        need = max(1, round(1.0 / (period * rate))) * period + last_beam if rate > 0 else math.inf
+        if not need <= MAX_DURATION_S:  # the simulator keeps one scan of any run at this rate
+            raise LmsbenchError(f"min_duration: at {rate:g} scans/s no simulated run of at most {MAX_DURATION_S:g} s "
+                                "keeps two scans (the simulator keeps its first alone)")
+        needs.append(need)
+    return math.ceil(max(needs) * 100 - 1e-6) / 100
 
 
 def main(argv: list[str] | None = None) -> int:

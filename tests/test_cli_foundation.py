@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from experiments.cli import main
+from lms200 import LmsbenchError
 
 
 @pytest.mark.shared_data
@@ -230,6 +231,11 @@ def test_the_slam_evaluations_shortest_duration_keeps_two_scans_at_each_rate(tmp
     for rates in [slameval.RATES_HZ, (37.5,), (5.0,), (1.0,), (20.0, 3.0), (0.01,)]:
         need = max(float(scan_stamps(sensor, MAX_DURATION_S, rate)[1]) for rate in rates) + sensor.beam_time_offsets.max()
         assert slameval.min_duration(rates) == math.ceil(need * 100 - 1e-6) / 100, rates
+    for rate in (1 / 3600, 0.0):  # a run of the longest keeps one scan: 3600.02 s was given for the first
+        assert len(scan_stamps(sensor, MAX_DURATION_S, rate or 1e-300)) == 1
+        with pytest.raises(LmsbenchError, match=f"^min_duration: at {rate:g} scans/s no simulated run of at most 3600 s "
+                                                "keeps two scans"):
+            slameval.min_duration((5.0, rate))
     shortest = slameval.min_duration()
     # the run at the shortest duration, into an earlier run's folder (told by its slameval.yaml): an earlier
     # long.parquet and mit.parquet stayed beside the tables of a run that wrote neither (`--long 0`, no MIT log),
