@@ -973,6 +973,13 @@ class Owner:
     #: outputs that tell a folder of a run from before its records (not records: beside a record,
     #: one of them holding anything else is still the run's own, to replace)
     legacy: Mapping[str, Callable[[Path], bool]] = field(default_factory=dict)
+    #: how the messages name the command where it is no lmsbench command (``python -m experiments.slameval``)
+    program: str = ""
+
+    @property
+    def named(self) -> str:
+        """The command as a user runs it: ``lmsbench COMMAND`` or ``program``."""
+        return self.program or f"lmsbench {self.command}"
 
     def told(self, folder: Path) -> set[str]:
         """The records of ``folder`` (``sub/name`` in sub-folders) that an earlier run wrote."""
@@ -1067,6 +1074,9 @@ BENCH_OWNER = Owner("bench", {
     "versions.yaml": _yaml_has("benchmarks", "quick", "versions", exact=True),
     "bench.csv": _csv_starts("area")})  # commands.bench: {"area": name, **row}; the next column is the first area's own
 SWEEP_OWNER = Owner("sweep", {"sweep.yaml": _yaml_has("name", "kind")})  # sweep.runner.spec_record
+#: ``python -m experiments.slameval``: its slameval.yaml (written first, whole: the run's settings and versions)
+SLAMEVAL_OWNER = Owner("slameval", {"slameval.yaml": _yaml_says(command="python -m experiments.slameval")},
+                       program="python -m experiments.slameval")
 #: The study's settings beside its tables (figures.study.save_tables, written first).
 _STUDY_RECORD = _yaml_has("world", "seed", "duration", "resolved", dicts=("resolved",))
 #: The demo: its report, the study's settings (figures.study.save_tables, written first), its
@@ -1131,12 +1141,12 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
             hidden = [n for n in theirs if not os.access(p / n, os.R_OK)]
             if hidden:  # said "holds config.yaml, which ... no earlier lmsbench compare run wrote" of an unreadable record
                 raise InputError(f"--out {p}: {p / hidden[0]} cannot be read (permission denied), so this run cannot "
-                                 f"tell whether an earlier lmsbench {owner.command} run wrote it; make it readable, or "
+                                 f"tell whether an earlier {owner.named} run wrote it; make it readable, or "
                                  "give another folder")
             if theirs:
                 shown = " and ".join(theirs) if len(theirs) <= 3 else ", ".join(theirs[:3]) + f" and {len(theirs) - 3} more"
-                raise InputError(f"--out {p}: holds {shown}, which this run would replace but no earlier lmsbench "
-                                 f"{owner.command} run wrote; give a new or empty folder")
+                raise InputError(f"--out {p}: holds {shown}, which this run would replace but no earlier "
+                                 f"{owner.named} run wrote; give a new or empty folder")
         _check_replaceable(p, tree if replaces is None else replaces, removed=patterns)
     parent = _nearest_existing(p)
     if not _writable_folder(parent):

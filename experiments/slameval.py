@@ -1,9 +1,10 @@
 """The SLAM evaluation behind docs/slam.md: simulated office runs per seed and rate (ATE), a long
 run's consistency (NEES), and MIT CSAIL (relations error), paper preset against the default.
 
-``python -m experiments.slameval --out results/slam-eval [--seeds 0-20] [--mit PATH]`` writes
-sim.parquet, mit.parquet (where the log is), long.parquet (unless ``--long 0``) and tables.md (markdown),
-an earlier run's in the folder removed first. Speeds are CPU time
+``python -m experiments.slameval --out results/slam-eval [--seeds 0-20] [--mit PATH|none]`` writes
+slameval.yaml (its settings, first), sim.parquet, mit.parquet (where the log is), long.parquet (unless
+``--long 0``) and tables.md (markdown), an earlier run's in the folder (told by its slameval.yaml) removed
+first, a file of these names no earlier run wrote refused. Speeds are CPU time
 (``time.process_time``) of ``run_slam`` (feature extraction included), one process, one core, the
 best of 3 runs on the simulated runs and of 2 for the default preset on MIT CSAIL.
 """
@@ -14,12 +15,18 @@ import argparse
 import math
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pandas as pd
 
-from experiments.options import DURATION, MAX_DURATION_S, SEED, OneLineParser, check_out, number, path_arg
-from experiments.provenance import write_parquet
+from experiments.options import (DURATION, MAX_DURATION_S, SEED, SLAMEVAL_OWNER, OneLineParser, OutTree, check_out,
+                                 number, path_arg)
+from experiments.provenance import versions, write_parquet, write_record
+from lms200.yamlio import dump as dump_yaml
+
+if TYPE_CHECKING:
+    from experiments.slamrun import SlamInput
 
 MIT_LOG = Path(__file__).resolve().parents[2] / "shared" / "data" / "carmen" / "mit-csail.clf.gz"
 
@@ -80,16 +87,33 @@ def long_run(seed: int, duration: float, rate: float) -> pd.DataFrame:
                           "cpu_scans_per_s": len(records) / cpu}])
 
 
-def mit_rows(path: Path, presets: list[str], inflations: tuple[float, ...] = (3.0, 10.0)) -> pd.DataFrame:
-    """Relations error (mean, std, median, long > 200 s) per preset on MIT CSAIL, and of the
-    default preset with other ``alignment.covariance_inflation`` values (robustness: the keyframe
+def read_mit(path: Path) -> SlamInput:
+    """The MIT CSAIL log at ``path``, read whole, with its relations (``NAME.relations`` beside it).
+
+    Raises:
+        LmsbenchError: not a log (``options.check_log``, then the reader), or no relations beside it
+            (:func:`mit_rows` scores against them: it failed after the runs, a TypeError traceback)."""
+    from experiments.options import InputError, check_log
+    from experiments.slamrun import load_input
+
+    data = load_input(check_log(path))
+    if data.relations is None:
+        raise InputError(f"--mit {path}: no relations file beside it (NAME.relations), which the relations error "
+                         "is scored against")
+    return data
+
+
+def mit_rows(data: SlamInput, presets: list[str], inflations: tuple[float, ...] = (3.0, 10.0)) -> pd.DataFrame:
+    """Relations error (mean, std, median, long > 200 s) per preset on MIT CSAIL (``data``, :func:`read_mit`),
+    and of the default preset with other ``alignment.covariance_inflation`` values (robustness: the keyframe
     and closure factors both take their noise from their matches, so one global factor should not
     move the result)."""
-    from experiments.slamrun import load_input
     from slam import SlamConfig
     from slam.metrics import interpolate_poses, relative
 
-    data = load_input(path)
+    rel = data.relations
+    if rel is None:  # read_mit refuses such a log
+        raise ValueError("mit_rows: the log has no relations to score against")
     records = list(data.records)  # held, as the runs are timed: a pass over data.records reads the log again
     rows = []
     # the extractor at its defaults: sigma_r 0.02 was given here "for the cm-mode ranges", which read
@@ -101,7 +125,6 @@ def mit_rows(path: Path, presets: list[str], inflations: tuple[float, ...] = (3.
                  for f in inflations]
     for preset, cfg in runs:
         result, cpu = _timed(records, cfg, repeats=2 if preset == "default" else 1)
-        rel = data.relations
         p1, _ = interpolate_poses(result.trajectory, rel[:, 0])
         p2, _ = interpolate_poses(result.trajectory, rel[:, 1])
         err = relative(rel[:, 2:5], relative(p1, p2))
@@ -161,7 +184,9 @@ _long.__name__ = "number"
 
 
 RATES_HZ = (37.5, 5.0)  # the simulated runs' rates: the LMS200's and decimated
-OUTPUTS = ("sim.parquet", "mit.parquet", "long.parquet", "tables.md")  # what --out receives
+#: what --out receives: slameval.yaml first, whole (it tells the folder as this script's: options.SLAMEVAL_OWNER)
+RECORD = "slameval.yaml"
+OUTPUTS = (RECORD, "sim.parquet", "mit.parquet", "long.parquet", "tables.md")
 #: the simulated runs' sensor, ``sim.SensorConfig()``'s: 361 beams 0.5 deg apart (a test holds them to it:
 #: importing the simulator to read them took 0.5 s of every parser build, ``--help`` and refusals included)
 SIM_BEAMS, SIM_RESOLUTION_RAD = 361, math.radians(0.5)
@@ -172,13 +197,25 @@ def min_duration(rates: tuple[float, ...] = RATES_HZ) -> float:
     fewest the ATE scores: `--duration 0.2` kept one at 5 scans/s and failed after the runs at 37.5 with
     a traceback ("ate: fewer than 2 estimated poses"). From the LMS200's timing (``lms200.timing``): a
     run's second scan kept at a rate is its every ``round(1 / (period * rate))``-th, as
-    ``sim.records.scan_stamps`` keeps them, and it ends with that scan's last beam."""
+    ``sim.records.scan_stamps`` keeps them, and it ends with that scan's last beam.
+
+    Raises:
+        LmsbenchError: a rate at which no run the simulator makes (``MAX_DURATION_S`` at most) keeps two
+            scans (below one scan an hour: it keeps the first alone; the 3600.02 s given for it was
+            longer than any run), or a rate that is not > 0."""
+    from lms200 import LmsbenchError
     from lms200.timing import beam_time_offsets, scan_period
 
     period = scan_period(SIM_RESOLUTION_RAD)
     last_beam = float(beam_time_offsets(SIM_BEAMS, SIM_RESOLUTION_RAD).max())
-    need = max(max(1, round(1.0 / (period * rate))) * period for rate in rates) + last_beam
-    return math.ceil(need * 100 - 1e-6) / 100
+    needs = []
+    for rate in rates:
+        need = max(1, round(1.0 / (period * rate))) * period + last_beam if rate > 0 else math.inf
+        if not need <= MAX_DURATION_S:  # the simulator keeps one scan of any run at this rate
+            raise LmsbenchError(f"min_duration: at {rate:g} scans/s no simulated run of at most {MAX_DURATION_S:g} s "
+                                "keeps two scans (the simulator keeps its first alone)")
+        needs.append(need)
+    return math.ceil(max(needs) * 100 - 1e-6) / 100
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -188,34 +225,62 @@ def main(argv: list[str] | None = None) -> int:
     from lms200 import LmsbenchError
 
     ap = OneLineParser(prog="python -m experiments.slameval", description=" ".join(__doc__.split("\n\n")[0].split()))
-    ap.add_argument("--out", type=path_arg, required=True, help="folder for sim.parquet, mit.parquet, long.parquet, tables.md")
+    ap.add_argument("--out", type=path_arg, required=True, help="folder for slameval.yaml, sim.parquet, mit.parquet, long.parquet, tables.md")
     ap.add_argument("--seeds", type=_seeds, default="0-20",
                     help=f"simulated office runs, a seed or a range LO-HI, at most {MAX_SEEDS} (default 0-20)")
     shortest = min_duration()
     ap.add_argument("--duration", type=number(shortest, MAX_DURATION_S, unit="s"), default=90.0,
                     help=f"duration (s) of each simulated run, at least {shortest:g}: two scans at 5 scans/s (default 90)")
-    ap.add_argument("--mit", type=Path, default=MIT_LOG,
-                    help="MIT CSAIL log (default: shared/data/carmen/mit-csail.clf.gz beside the checkout; skipped where absent)")
+    ap.add_argument("--mit", type=_mit, default=MIT_LOG if MIT_LOG.exists() else None,
+                    help="MIT CSAIL log, with its NAME.relations beside it, or 'none' for no MIT CSAIL run (default: "
+                         "shared/data/carmen/mit-csail.clf.gz beside the checkout, none where absent)")
     ap.add_argument("--long", type=_long, default=900.0, help="duration (s) of the consistency run (default 900; 0: none)")
     args = ap.parse_args(argv)
     try:  # a user error is one line, exit 2, as the CLI's (an existing file as --out was a FileExistsError traceback)
-        check_out(args.out, OUTPUTS)
+        check_out(args.out, OUTPUTS, owner=SLAMEVAL_OWNER)  # only an earlier run's files are replaced
         return _run(args)
     except LmsbenchError as exc:
         ap.error(str(exc))
     return 2
 
 
+def _mit(text: str) -> Path | None:
+    """An argparse type: ``--mit``'s log, which must exist, or None for the word 'none' (a log given that
+    did not exist was passed over in silence, and the run wrote no MIT CSAIL table)."""
+    if text.strip().lower() == "none":
+        return None
+    path = path_arg(text)
+    if not path.exists():
+        raise argparse.ArgumentTypeError(f"{text}: no such file (give 'none' for no MIT CSAIL run)")
+    return path
+
+
+def record(args: argparse.Namespace) -> str:
+    """slameval.yaml: the run's settings and versions, which tell its folder as this script's."""
+    seeds = f"{args.seeds[0]}-{args.seeds[-1]}" if len(args.seeds) > 1 else str(args.seeds[0])
+    return ("# what wrote this folder; python -m experiments.slameval --out replaces its files only beside this record\n"
+            + dump_yaml({"command": "python -m experiments.slameval", "seeds": seeds, "duration_s": args.duration,
+                         "long_s": args.long, "mit": None if args.mit is None else str(args.mit),
+                         "versions": versions()}, sort_keys=False))
+
+
 def _run(args: argparse.Namespace) -> int:
     """The evaluation of the parsed options: the tables, written into ``args.out``, whose earlier run's
-    outputs (all ``check_out`` let it hold) are removed first: one this run does not write (long.parquet
-    under `--long 0`, mit.parquet without the log) stayed beside the new tables as if it were this run's."""
+    outputs (all ``check_out`` let it hold: beside that run's slameval.yaml) are removed first: one this run
+    does not write (long.parquet under `--long 0`, mit.parquet without the log) stayed beside the new tables
+    as if it were this run's."""
+    # the log read (and so checked) whole before anything is removed: a --mit file that was no log was
+    # refused after the earlier run's outputs (hours of runs) were gone
+    data = None if args.mit is None else read_mit(args.mit)
     args.out.mkdir(parents=True, exist_ok=True)
-    for name in OUTPUTS:  # before any is written, as options.Owner.remove_earlier: a stopped run leaves no mix
-        (args.out / name).unlink(missing_ok=True)
+    # before any is written: a stopped run leaves no mix; only the files an earlier run's record tells as its own
+    # (check_out refused any other: a user's long.parquet in the folder was removed by its name alone)
+    SLAMEVAL_OWNER.remove_earlier(args.out, OutTree(OUTPUTS), keep=(RECORD,))
+    write_record(args.out / RECORD, record(args))
     md = []
-    if args.mit.exists():
-        mit = mit_rows(args.mit, ["paper", "default"])
+    if data is not None:
+        mit = mit_rows(data, ["paper", "default"])
+        del data  # its scans are not held through the other runs
         write_parquet(mit, args.out / "mit.parquet")
         md += [_md(mit), ""]
     if args.long > 0:

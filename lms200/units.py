@@ -4,9 +4,10 @@ A ``Scan``'s ranges are metres, and a reading beyond ``range_max`` is no return 
 written in millimetres (a user's array, a log or bag written so) lie about 1000x too far: every
 one beyond ``range_max``, so every beam reads as no return, no extractor finds a line, and nothing
 said why. :func:`units_problem` tells such scans from open space by what their readings would be
-in metres, divided by 1000; its text names millimetres where divided by 100 they would not be in range
-(centimetres ruled out), else millimetres or centimetres (ranges in centimetres, divided by 1000, lie in
-range too: the data cannot tell them apart). The log readers (``lms200.carmen``, ``lms200.bag``),
+in metres, divided by 1000; its text names millimetres where divided by 100 they would lie beyond both
+``range_max`` and the farthest an LMS200 reads (``CM_REACH_M``: centimetres ruled out), else millimetres
+or centimetres (ranges in centimetres, divided by 1000, lie in range too, and a ``range_max`` set short
+does not bound what the scanner read: the data cannot tell them apart). The log readers (``lms200.carmen``, ``lms200.bag``),
 ``experiments.compare.compare`` and ``slam.run_slam`` (a user's records, which no reader saw; a
 reader given to them warns itself) warn with it, once per pass or run, from the scans they read
 anyway (none read ahead), never per scan of an extraction: ``features.extract`` does not look (a
@@ -23,6 +24,7 @@ from typing import Iterable, Iterator
 
 import numpy as np
 
+from .codes import LMS200_MAX_RANGE
 from .errors import LmsbenchWarning
 from .records import Record
 from .scan import Scan
@@ -41,6 +43,10 @@ NEAREST_SCENE_M = 0.1
 #: by 1000 (not all: the LMS200's no-return code in mm mode, 8191 mm, divides to 8.191 m, past 8.183);
 #: the same share of them divided by 100 leaves centimetres open in the text (:meth:`UnitsTally.evidence`)
 IN_RANGE_SHARE = 0.9
+#: m: how far a reading in centimetres, divided by 100, may lie and still be one: the farther of a scan's
+#: range_max and the LMS200's reach in cm mode (codes.LMS200_MAX_RANGE); a range_max set short (1-8 m) ruled
+#: centimetres out of the text for readings of a room 10-30 m across, which it does not bound
+CM_REACH_M = LMS200_MAX_RANGE["cm"]
 
 
 class RangeUnitsWarning(LmsbenchWarning):
@@ -54,7 +60,7 @@ class UnitsTally:
 
     def __init__(self) -> None:
         self.scans = self.readings = self.in_range = 0
-        self.in_range_cm = 0  # readings in range divided by 100 (what the text says, not whether it is said)
+        self.in_range_cm = 0  # readings within CM_REACH_M divided by 100 (what the text says, not whether it is said)
         self.valid = False  # a valid beam in some scan: no doubt left
         self.within = False  # a reading > 0 at or below its range_max (below range_min: not valid, not far either)
         self.least = self.most = math.nan  # the smallest and largest reading
@@ -78,7 +84,7 @@ class UnitsTally:
         metres = r / 1000.0
         self.in_range += int(np.count_nonzero((metres >= near) & (metres <= hi)))
         metres = r / 100.0
-        self.in_range_cm += int(np.count_nonzero((metres >= near) & (metres <= hi)))
+        self.in_range_cm += int(np.count_nonzero((metres >= near) & (metres <= max(hi, CM_REACH_M))))
         self.least, self.most = float(np.fmin(self.least, r.min())), float(np.fmax(self.most, r.max()))
         self.range_max = min(self.range_max, hi)
         if len(self.values) < MIN_DISTINCT:
@@ -90,8 +96,9 @@ class UnitsTally:
 
     def evidence(self) -> str | None:
         """Why the scans added look like millimetres, after "none has a valid beam" (or None): millimetres
-        where divided by 100 fewer than IN_RANGE_SHARE of the readings would be in range, else millimetres
-        or centimetres (whenever it is said, divided by 1000 they are: centimetres are never ruled in)."""
+        where divided by 100 fewer than IN_RANGE_SHARE of the readings would lie within [near, max(range_max,
+        CM_REACH_M)] (farther than any LMS200 reads), else millimetres or centimetres (whenever it is said,
+        divided by 1000 they are in range: centimetres are never ruled in)."""
         if self.valid or self.within or self.readings < MIN_READINGS or len(self.values) < MIN_DISTINCT:
             return None
         share = self.in_range / self.readings

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from experiments.cli import main
+from lms200 import LmsbenchError
 
 
 @pytest.mark.shared_data
@@ -214,10 +215,14 @@ def test_the_slam_evaluations_options_are_checked_as_the_commands_are(tmp_path: 
 def test_the_slam_evaluations_shortest_duration_keeps_two_scans_at_each_rate(tmp_path: Path,
                                                                            capsys: pytest.CaptureFixture[str]) -> None:
     """--duration's minimum is the shortest run that keeps two scans at each rate (the ATE's fewest), as the
-    simulator keeps them; an existing file as --out was a FileExistsError traceback, `--out ""` wrote into
-    the current folder: one line, exit 2."""
+    simulator keeps them, and a run of it leaves only its own outputs in an earlier run's folder; an existing
+    file as --out was a FileExistsError traceback, `--out ""` wrote into the current folder: one line, exit 2."""
+    import argparse
+
     from experiments import slameval
-    from experiments.options import MAX_DURATION_S
+    from experiments.options import MAX_DURATION_S, SLAMEVAL_OWNER
+    from experiments.provenance import read_parquet
+    from lms200.yamlio import load as load_yaml
     from sim import SensorConfig, simulate_records
     from sim.records import scan_stamps
 
@@ -226,13 +231,33 @@ def test_the_slam_evaluations_shortest_duration_keeps_two_scans_at_each_rate(tmp
     for rates in [slameval.RATES_HZ, (37.5,), (5.0,), (1.0,), (20.0, 3.0), (0.01,)]:
         need = max(float(scan_stamps(sensor, MAX_DURATION_S, rate)[1]) for rate in rates) + sensor.beam_time_offsets.max()
         assert slameval.min_duration(rates) == math.ceil(need * 100 - 1e-6) / 100, rates
+    for rate in (1 / 3600, 0.0):  # a run of the longest keeps one scan: 3600.02 s was given for the first
+        assert len(scan_stamps(sensor, MAX_DURATION_S, rate or 1e-300)) == 1
+        with pytest.raises(LmsbenchError, match=f"^min_duration: at {rate:g} scans/s no simulated run of at most 3600 s "
+                                                "keeps two scans"):
+            slameval.min_duration((5.0, rate))
     shortest = slameval.min_duration()
-    for rate in slameval.RATES_HZ:
-        assert len(simulate_records("office", seed=0, duration=shortest, rate_hz=rate)) >= 2
+    # the run at the shortest duration, into an earlier run's folder (told by its slameval.yaml): an earlier
+    # long.parquet and mit.parquet stayed beside the tables of a run that wrote neither (`--long 0`, no MIT log),
+    # read as this run's; its own outputs are what is left
+    out = tmp_path / "eval"
+    out.mkdir()
+    for name in slameval.OUTPUTS:
+        (out / name).write_text("an earlier run's\n")
+    (out / slameval.RECORD).write_text(slameval.record(argparse.Namespace(seeds=[0, 1], duration=1.0, long=0.0,
+                                                                          mit=None)))
+    assert slameval.main(["--out", str(out), "--seeds", "0", "--long", "0", "--mit", "none",
+                          "--duration", f"{shortest:g}"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == sorted([slameval.RECORD, "sim.parquet", "tables.md"])
+    assert SLAMEVAL_OWNER.told(out) == {slameval.RECORD}
+    assert load_yaml((out / slameval.RECORD).read_text())["seeds"] == "0"
+    table = read_parquet(out / "sim.parquet")  # two scans or more at each rate (the simulator's, as run)
+    assert sorted(table.rate_hz) == sorted(slameval.RATES_HZ) and set(table.seed) == {0} and table.scans.min() >= 2
+    assert (out / "tables.md").read_text().strip() in capsys.readouterr().out
     assert len(simulate_records("office", seed=0, duration=shortest - 0.01, rate_hz=min(slameval.RATES_HZ))) == 1
     (tmp_path / "f").write_text("mine\n")
     with pytest.raises(SystemExit) as stop:
-        slameval.main(["--out", str(tmp_path / "f"), "--seeds", "0", "--long", "0", "--mit", str(tmp_path / "none")])
+        slameval.main(["--out", str(tmp_path / "f"), "--seeds", "0", "--long", "0", "--mit", "none"])
     assert stop.value.code == 2
     err = capsys.readouterr().err
     assert err.startswith(f"python -m experiments.slameval: error: --out {tmp_path / 'f'}: exists and is not a folder"), err
@@ -243,22 +268,60 @@ def test_the_slam_evaluations_shortest_duration_keeps_two_scans_at_each_rate(tmp
     assert capsys.readouterr().err.startswith("python -m experiments.slameval: error: argument --out: empty path ''")
 
 
-def test_the_slam_evaluation_leaves_only_its_own_outputs(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    """An earlier run's long.parquet and mit.parquet stayed beside the tables of a run that wrote neither (`--long 0`,
-    no MIT log), read as this run's; its own outputs are what is left (the shortest run: one seed, 0.24 s)."""
+def test_the_slam_evaluation_replaces_only_an_earlier_runs_outputs(tmp_path: Path,
+                                                                   capsys: pytest.CaptureFixture[str]) -> None:
+    """A user's own long.parquet (or slameval.yaml) in --out was removed by its name alone: a file of its output
+    names is replaced only beside the slameval.yaml an earlier run wrote (options.SLAMEVAL_OWNER), else refused and
+    kept (the --mit given is no log: a run that got past the check would fail there, fast, with another line)."""
+    import argparse
+
     from experiments import slameval
-    from experiments.provenance import read_parquet
+
+    bad = tmp_path / "bad.log"
+    bad.write_text("hello\n")
+    earlier = slameval.record(argparse.Namespace(seeds=[0, 1], duration=1.0, long=0.0, mit=bad))
+    for mine in [{"long.parquet": "mine\n"}, {"slameval.yaml": "command: mine\n", "tables.md": "mine\n"},
+                 {"slameval.yaml": earlier.replace("experiments.slameval\n", "experiments.other\n", 1)}]:
+        out = tmp_path / f"eval{len(mine)}{len(mine[next(iter(mine))])}"
+        out.mkdir()
+        for name, text in mine.items():
+            (out / name).write_text(text)
+        with pytest.raises(SystemExit) as stop:
+            slameval.main(["--out", str(out), "--seeds", "0", "--long", "0", "--mit", str(bad)])
+        assert stop.value.code == 2
+        shown = " and ".join(mine)
+        assert capsys.readouterr().err.startswith(
+            f"python -m experiments.slameval: error: --out {out}: holds {shown}, which this run would replace but no "
+            "earlier python -m experiments.slameval run wrote; give a new or empty folder"), mine
+        assert {p.name: p.read_text() for p in out.iterdir()} == mine
+
+
+def test_the_slam_evaluation_reads_its_log_before_it_removes_an_earlier_runs_outputs(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """A --mit file that is no log (or a log without its relations, a TypeError traceback after the runs) was
+    refused after the folder's earlier outputs, hours of runs, were removed: it is read first, and they stay."""
+    import argparse
+
+    from experiments import slameval
 
     out = tmp_path / "eval"
     out.mkdir()
     for name in slameval.OUTPUTS:
         (out / name).write_text("an earlier run's\n")
-    assert slameval.main(["--out", str(out), "--seeds", "0", "--long", "0", "--mit", str(tmp_path / "none"),
-                          "--duration", f"{slameval.min_duration():g}"]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["sim.parquet", "tables.md"]
-    table = read_parquet(out / "sim.parquet")
-    assert sorted(table.rate_hz) == sorted(slameval.RATES_HZ) and set(table.seed) == {0}
-    assert (out / "tables.md").read_text().strip() in capsys.readouterr().out
+    earlier = slameval.record(argparse.Namespace(seeds=[0], duration=1.0, long=0.0, mit=None))
+    (out / slameval.RECORD).write_text(earlier)
+    bad, bare = tmp_path / "bad.log", tmp_path / "bare.log"
+    bad.write_text("hello\n")
+    bare.write_text("".join(f"FLASER 181 {' '.join(['2.00'] * 181)} 0 0 0 0 0 0 {t:g} host {t:g}\n" for t in (0, 0.2, 0.4)))
+    gone = tmp_path / "mit-csail.clf.gz"  # a log given that is not there was passed over, and no MIT CSAIL table written
+    for log, says in [(bad, f"{bad}: not a CARMEN log"), (bare, f"--mit {bare}: no relations file beside it"),
+                      (gone, f"argument --mit: {gone}: no such file (give 'none' for no MIT CSAIL run)")]:
+        with pytest.raises(SystemExit) as stop:
+            slameval.main(["--out", str(out), "--seeds", "0", "--long", "0", "--mit", str(log)])
+        assert stop.value.code == 2
+        assert capsys.readouterr().err.startswith(f"python -m experiments.slameval: error: {says}")
+        assert {p.name: p.read_text() for p in out.iterdir()} == {**dict.fromkeys(slameval.OUTPUTS, "an earlier run's\n"),
+                                                                  slameval.RECORD: earlier}
 
 
 def test_a_missing_input_names_the_file_it_was_likely_meant_to_be(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,

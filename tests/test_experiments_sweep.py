@@ -1306,7 +1306,8 @@ def test_a_resume_reads_a_null_parameter_from_the_cells_footer(tmp_path, monkeyp
 def test_a_sweeps_cells_folder_is_checked_once_whether_it_exists_or_is_made(tmp_path, monkeypatch):
     """The cells folder was checked as writable twice when cells remained (plan_sweep, then the run): once
     now, by plan_sweep, which also checks where a new folder's is made (a new folder beneath a read-only
-    one was a PermissionError traceback from the library, the command line's check_out aside)."""
+    one was a PermissionError traceback from the library, the command line's check_out aside); so were a read-only
+    sweep folder whose cells/ was writable and a new folder beneath a regular file (a NotADirectoryError)."""
     import experiments.sweep.store as store
 
     checks = []
@@ -1331,3 +1332,20 @@ def test_a_sweeps_cells_folder_is_checked_once_whether_it_exists_or_is_made(tmp_
                                             rf"be made: {locked} is not writable, and cells are left to compute"):
         run_sweep(spec, locked / "a", "inprocess", progress=False)
     assert list(locked.iterdir()) == [] and computed(log) == ["0 0", "0 0"]
+    # the sweep folder read-only, its cells/ writable: every run writes its sweep.yaml there, cells left or none (a
+    # PermissionError naming sweep.yaml's temporary file); a new folder beneath a file was a NotADirectoryError
+    monkeypatch.setattr(store.os, "access", lambda p, mode, **kw: Path(p) != out and real_access(p, mode, **kw))
+    kept = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
+    for left in (0, 1):
+        if left:
+            next((out / "cells").glob("*.parquet")).unlink()
+            kept = {p: b for p, b in kept.items() if p.exists()}
+        with pytest.raises(LmsbenchError, match=f"^{re.escape(str(out))}: the sweep folder is not writable, and every run "
+                                                "writes its sweep.yaml, versions.yaml and tables there; make it writable"):
+            run_sweep(spec, out, "inprocess", progress=False)
+        assert {p: p.read_bytes() for p in out.rglob("*") if p.is_file()} == kept and computed(log) == ["0 0", "0 0"]
+    (tmp_path / "file").write_text("mine\n")
+    with pytest.raises(LmsbenchError, match=f"^{re.escape(str(tmp_path / 'file' / 'a' / 'cells'))}: the sweep's folder of "
+                                            f"finished cells cannot be made: {re.escape(str(tmp_path / 'file'))} is not a folder"):
+        run_sweep(spec, tmp_path / "file" / "a", "inprocess", progress=False)
+    assert (tmp_path / "file").read_text() == "mine\n" and computed(log) == ["0 0", "0 0"]

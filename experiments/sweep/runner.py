@@ -79,7 +79,8 @@ def plan_sweep(spec: SweepSpec, out: str | Path, fn: Any, retry_failed: bool = F
     (a folder without ``cells/`` has none finished).
 
     Raises:
-        LmsbenchError: ``out/cells`` cannot be read, or cannot be written (or, absent, made) while cells remain.
+        LmsbenchError: ``out/cells`` cannot be read, or cannot be written (or, absent, made) while cells remain;
+            ``out`` cannot be written (or, absent, made).
     """
     out = _sweep_folder(out)
     cells = spec.cells()
@@ -93,6 +94,7 @@ def plan_sweep(spec: SweepSpec, out: str | Path, fn: Any, retry_failed: bool = F
     todo = list({key: params for key, params in zip(keys, cells) if key not in done}.items())  # identical cells once
     if todo:
         store.check_writable()  # before any cell is computed (or a scheduler reached); the folder as it is or as made
+    store.check_root_writable()  # its sweep.yaml, versions.yaml and tables, written by every run, cells left or none
     return SweepPlan(spec, out, retry_failed, keys, dict(zip(keys, inputs)), todo)
 
 
@@ -201,7 +203,7 @@ def _run_into(plan: SweepPlan, store: CellStore, fn: Any, executor: Any, workers
     digests = getattr(fn, "input_digests", None)
     from experiments.provenance import versions, write_record
 
-    record = spec_record(spec)  # its cells folder was checked as writable by plan_sweep
+    record = spec_record(spec)  # the folder and its cells folder were checked as writable by plan_sweep
     # every check first, then the first write: a run refused above (a cell folder not writable, a folder where a
     # cell's file goes, an input that cannot be read) rewrote sweep.yaml and versions.yaml and removed the
     # folder's table of the earlier sweep before it was refused

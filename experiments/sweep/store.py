@@ -123,12 +123,20 @@ class CellStore:
             return
         if self.cells.exists() or self.cells.is_symlink():  # a file (or a broken link) there: making it says so
             return
-        parent = self.cells.parent
-        while not parent.exists() and parent != parent.parent:
-            parent = parent.parent
-        if parent.is_dir() and not os.access(parent, os.W_OK | os.X_OK):
-            raise LmsbenchError(f"{self.cells}: the sweep's folder of finished cells cannot be made: {parent} is not "
-                                "writable, and cells are left to compute; give a folder that can be written")
+        _check_made_in(self.cells, "the sweep's folder of finished cells", "and cells are left to compute")
+
+    def check_root_writable(self) -> None:
+        """Raise LmsbenchError when the sweep folder (``root``) cannot be written, or, where it is yet to be made,
+        made: every run writes its sweep.yaml, versions.yaml and tables there, finished or not, so a read-only
+        folder whose cells/ was writable failed writing sweep.yaml (a PermissionError naming its temporary
+        file), and a new folder beneath a regular file a NotADirectoryError, tracebacks from the library
+        (the command line's ``check_out`` said both first). Before any cell (``runner.plan_sweep``)."""
+        what, why = "the sweep folder", "and every run writes its sweep.yaml, versions.yaml and tables there"
+        if not self.root.exists() and not self.root.is_symlink():
+            _check_made_in(self.root, what, why)
+        elif self.root.is_dir() and not os.access(self.root, os.W_OK | os.X_OK):
+            raise LmsbenchError(f"{self.root}: {what} is not writable, {why}; make it writable (chmod u+w), or give "
+                                "another folder")
 
     def status(self, key: str) -> str | None:
         """"ok", "error", or None when the cell has no file (or a damaged one)."""
@@ -160,6 +168,20 @@ class CellStore:
         columns = list(dict.fromkeys(c for f in frames for c in f.columns))
         frames = [f.dropna(axis=1, how="all") for f in frames]  # all-null cells must not decide dtypes
         return _tidy(pd.concat(frames, ignore_index=True, sort=False).reindex(columns=columns))
+
+
+def _check_made_in(folder: Path, what: str, why: str) -> None:
+    """Raise LmsbenchError when ``folder`` (absent) cannot be made: its nearest existing ancestor is no folder
+    (a regular file: NotADirectoryError) or not a writable one (PermissionError)."""
+    parent = folder.parent
+    while not parent.exists() and not parent.is_symlink() and parent != parent.parent:
+        parent = parent.parent
+    if not parent.is_dir():
+        raise LmsbenchError(f"{folder}: {what} cannot be made: {parent} is not a folder (a file, or a link to none), "
+                            f"{why}; give a folder that can be written")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise LmsbenchError(f"{folder}: {what} cannot be made: {parent} is not writable, {why}; give a folder that "
+                            "can be written")
 
 
 def _whole_parquet(path: Path) -> Any:
