@@ -258,6 +258,23 @@ def plain_number(text: str, integer: bool = False) -> float:
     return value
 
 
+def plain(integer: bool = False) -> Callable[[str], float]:
+    """An argparse type: ``plain_number`` of the word, for an option with ``choices`` (``simulate
+    --resolution-deg``, ``lms200 record --baud / --fov-deg / --resolution-deg``), whose range the
+    choices say. ``type=float`` / ``int`` took "1_80" as 180, "٣٨٤٠٠" as 38400 and "1\\xa0" as 1: a
+    word that is no plain number is argparse's "invalid float value" (``int``: "invalid int value");
+    one that underflows says so."""
+
+    def parse(text: str) -> float:
+        try:
+            return plain_number(text, integer)
+        except Underflow as exc:  # --resolution-deg 1e-400 said "invalid choice: 0.0"
+            raise argparse.ArgumentTypeError(f"got {text!r}: {exc}") from None
+
+    parse.__name__ = "int" if integer else "float"  # argparse's message: "invalid float value: '1_0'"
+    return parse
+
+
 def number(lo: float | None = None, hi: float | None = None, *, lo_open: bool = False, unit: str = "",
            integer: bool = False) -> Callable[[str], float]:
     """An argparse type: a finite number in [lo, hi] (lo excluded with ``lo_open``)."""
