@@ -340,6 +340,10 @@ CASES = [
      "argument --fov-deg/--fov: invalid int value: '1_80'"),
     (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--baud", "\u0663\u0668\u0664\u0660\u0660"],
      "argument --baud: invalid int value"),
+    # a count beyond int64's passed the options; compare compiled its kernels and read the log, then stopped on the
+    # library's "stride: must be an integer in 1..2^63 - 1" (probe 13)
+    (["compare", "{good.clf}", "--stride", "99999999999999999999999", "--out", O],
+     "argument --stride: must be a whole number >= 1 and at most 2^63 - 1, got '99999999999999999999999'"),
     # the same field set twice ran the last value alone, exit 0 (an option given twice is refused)
     (["compare", "office:1", "--set", "extractor.sensor.k=2", "--set", "extractor.sensor.k=3", "--out", O],
      "--set extractor.sensor.k is given twice (extractor.sensor.k=2 and extractor.sensor.k=3); set each field once"),
