@@ -258,6 +258,23 @@ def plain_number(text: str, integer: bool = False) -> float:
     return value
 
 
+def plain(integer: bool = False) -> Callable[[str], float]:
+    """An argparse type: ``plain_number`` of the word, for an option with ``choices`` (``simulate
+    --resolution-deg``, ``lms200 record --baud / --fov-deg / --resolution-deg``), whose range the
+    choices say. ``type=float`` / ``int`` took "1_80" as 180, "٣٨٤٠٠" as 38400 and "1\\xa0" as 1: a
+    word that is no plain number is argparse's "invalid float value" (``int``: "invalid int value");
+    one that underflows says so."""
+
+    def parse(text: str) -> float:
+        try:
+            return plain_number(text, integer)
+        except Underflow as exc:  # --resolution-deg 1e-400 said "invalid choice: 0.0"
+            raise argparse.ArgumentTypeError(f"got {text!r}: {exc}") from None
+
+    parse.__name__ = "int" if integer else "float"  # argparse's message: "invalid float value: '1_0'"
+    return parse
+
+
 def number(lo: float | None = None, hi: float | None = None, *, lo_open: bool = False, unit: str = "",
            integer: bool = False) -> Callable[[str], float]:
     """An argparse type: a finite number in [lo, hi] (lo excluded with ``lo_open``)."""
@@ -312,9 +329,27 @@ def scan_rate(text: str) -> float:
 scan_rate.__name__ = "number"  # argparse names the type in some messages
 
 
+#: the largest count an option takes without a bound of its own: int64's, as the library's counts
+#: (``lms200.finite.check_integer``)
+MAX_COUNT = 2**63 - 1
+
+
 def count(lo: int = 1, hi: int | None = None) -> Callable[[str], float]:
-    """A whole number >= lo (scan counts, strides, workers)."""
-    return number(lo, hi, integer=True)
+    """A whole number >= lo (scan counts, strides, workers), at most ``hi`` or else int64's bound
+    (``MAX_COUNT``): `compare --stride 99999999999999999999999` passed the options, compiled the
+    kernels and read the log, then stopped on the library's "stride: must be an integer in 1..2^63 - 1"."""
+    parse_number = number(lo, hi, integer=True)
+    if hi is not None:
+        return parse_number
+
+    def parse(text: str) -> float:
+        value = parse_number(text)
+        if value > MAX_COUNT:
+            raise argparse.ArgumentTypeError(f"must be a whole number >= {lo} and at most 2^63 - 1, got {text!r}")
+        return value
+
+    parse.__name__ = "integer"
+    return parse
 
 
 def path_arg(text: str) -> Path:

@@ -391,11 +391,14 @@ def missing_file_reason(path: Path) -> str:
 
 
 def path_of(path: object) -> Path:
-    """``path`` as a Path; InputError naming it when it is not a str or os.PathLike, or when a name
+    """``path`` as a Path; InputError naming it when it is not a str or os.PathLike, an empty or blank
+    str (an unset ``$LOG``: pathlib reads "" as the current folder), or when a name
     in it is longer than the file system takes (NAME_MAX, 255 bytes on Linux's: the readers and
     writers raised a raw OSError, "File name too long", from their first look at it)."""
     if not isinstance(path, (str, os.PathLike)):
         raise InputError(f"path: must be a str or os.PathLike, got {type(path).__name__}")
+    if isinstance(path, str) and not path.strip():  # Path("") is ".": read_log("") said ". is a folder but not a ROS 2 bag"
+        raise InputError(f"path: empty ({path!r}); give a file or folder name")
     p = Path(path)
     for part in p.parts:
         size = len(os.fsencode(part))

@@ -2280,3 +2280,12 @@ def test_slam_overflow_to_inf_is_said_without_numpys_warnings() -> None:
     assert mahalanobis2(np.array([0.0, 1e5]), np.diag([1.0, 1e-300])) == np.inf
     points = ScanPoints.from_points(np.array([[1e200, 0.0], [1.0, 2.0]]), AlignmentConfig())
     assert points.valid.tolist() == [[1.0, 2.0]]
+
+
+@pytest.mark.parametrize("call", [lambda: read_log(""), lambda: read_log("  "), lambda: write_log("", [])],
+                         ids=["read_log", "read_log blank", "write_log"])
+def test_an_empty_path_is_refused_as_empty_not_read_as_the_current_folder(call) -> None:
+    """``read_log("")`` (an unset ``$LOG``) said ". is a folder but not a ROS 2 bag (no metadata.yaml)":
+    pathlib reads "" as the current folder (probe 13)."""
+    with pytest.raises(InputError, match=r"^path: empty \('\s*'\); give a file or folder name$"):
+        call()

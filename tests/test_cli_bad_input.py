@@ -332,6 +332,18 @@ CASES = [
     (["compare", "office:\u0663", "--out", O], "the seed after the colon must be a whole number >= 0"),
     (["compare", "office:1", "--sigma", "1_0", "--out", O], "--sigma takes metres or 'auto', got '1_0'"),
     (["slam", "{simrun}", "--every", "\uff12", "--out", O], "argument --every/--stride: must be a whole number >= 1"),
+    # the options with choices read their word with float() / int(): --fov-deg 1_80 recorded at 180 deg, --baud
+    # with Arabic-Indic digits at 38400, simulate --resolution-deg with one ran at 1 deg (probe 13)
+    (["simulate", "--resolution-deg", "\u0661", "--out", O],
+     "argument --resolution-deg/--resolution: invalid float value: '\u0661'"),
+    (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--fov-deg", "1_80"],
+     "argument --fov-deg/--fov: invalid int value: '1_80'"),
+    (["lms200", "record", "--port", "loop://", "--out", "{out}/x.clf", "--baud", "\u0663\u0668\u0664\u0660\u0660"],
+     "argument --baud: invalid int value"),
+    # a count beyond int64's passed the options; compare compiled its kernels and read the log, then stopped on the
+    # library's "stride: must be an integer in 1..2^63 - 1" (probe 13)
+    (["compare", "{good.clf}", "--stride", "99999999999999999999999", "--out", O],
+     "argument --stride: must be a whole number >= 1 and at most 2^63 - 1, got '99999999999999999999999'"),
     # the same field set twice ran the last value alone, exit 0 (an option given twice is refused)
     (["compare", "office:1", "--set", "extractor.sensor.k=2", "--set", "extractor.sensor.k=3", "--out", O],
      "--set extractor.sensor.k is given twice (extractor.sensor.k=2 and extractor.sensor.k=3); set each field once"),

@@ -20,7 +20,7 @@ from lms200.virtual import MAX_TIME_SCALE, MIN_TIME_SCALE
 
 from experiments.lms200_sources import log_scans, simulator_scans
 from experiments.logargs import add_log_options, given_log_flags, read_log_options
-from experiments.options import (WORLDS, PORT, SEED, InputError, check_link, check_log, check_out_file, count, mid_sentence, number,
+from experiments.options import (WORLDS, PORT, SEED, InputError, check_link, check_log, check_out_file, count, mid_sentence, number, plain,
                                  path_arg, text, warnings_after_checks, world_name)
 
 
@@ -56,11 +56,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     r = cmds.add_parser("record", help="record an LMS200 to a CARMEN log (.clf, .log, .gz) or a ROS bag (.bag)")
     r.add_argument("--port", required=True, type=text("a serial device or a pyserial URL"), help="serial device or pyserial URL (socket://host:port, rfc2217://, loop://)")
     r.add_argument("--out", type=path_arg, required=True, help="output: FILE.clf / .log / .gz (CARMEN) or FILE.bag (ROS 1)")
-    r.add_argument("--baud", type=int, default=38400, choices=sorted(BAUD_MODES), help="line speed to switch to (default 38400)")
+    r.add_argument("--baud", type=plain(integer=True), default=38400, choices=sorted(BAUD_MODES), help="line speed to switch to (default 38400)")
     r.add_argument("--units", choices=("mm", "cm"), default="mm", help="range unit: mm (8.18 m) or cm (81.8 m) (default mm)")
-    r.add_argument("--fov-deg", "--fov", dest="fov_deg", type=int, default=180, choices=(180, 100),
+    r.add_argument("--fov-deg", "--fov", dest="fov_deg", type=plain(integer=True), default=180, choices=(180, 100),
                    help="field of view, deg (default 180; --fov is the old spelling)")
-    r.add_argument("--resolution-deg", "--resolution", dest="resolution_deg", type=float, default=0.5,
+    r.add_argument("--resolution-deg", "--resolution", dest="resolution_deg", type=plain(), default=0.5,
                    choices=(1.0, 0.5, 0.25), help="angular resolution, deg (default 0.5; --resolution is the old spelling)")
     r.add_argument("--max-scans", type=count(1), help="stop after this many scans")
     r.add_argument("--duration", type=STOP_AFTER, help=f"stop after this many seconds (at least {MIN_DURATION_S:g}; one that ends before the first scan, "

@@ -8,7 +8,7 @@ from lms200.yamlio import load as load_yaml
 import argparse
 import math
 
-from experiments.options import (WORLDS, DURATION, MAX_DURATION_S, MIN_DURATION_S, SEED, SIMULATE_OUTPUTS, SIMULATE_OWNER, InputError, check_file, warnings_after_checks, check_sim2real_finished,
+from experiments.options import (WORLDS, DURATION, MAX_DURATION_S, MIN_DURATION_S, SEED, SIMULATE_OUTPUTS, SIMULATE_OWNER, InputError, plain, check_file, warnings_after_checks, check_sim2real_finished,
                                  check_world_file,
                                  check_out, check_out_spares, check_yaml, known_worlds, number, path_arg, scan_rate, world_hint)
 
@@ -32,7 +32,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help=f"simulated time, s (default 120, at most {MAX_DURATION_S:g})")
     p.add_argument("--out", type=path_arg, required=True, help="output folder")
     p.add_argument("--rate-hz", type=scan_rate, default=None, help="keep about this many scans/s (default all)")
-    p.add_argument("--resolution-deg", "--resolution", dest="resolution_deg", type=float, choices=(0.25, 0.5, 1.0),
+    p.add_argument("--resolution-deg", "--resolution", dest="resolution_deg", type=plain(), choices=(0.25, 0.5, 1.0),
                    default=None, help="angular resolution, deg: 0.5 (361 beams), 1 (181), 0.25 (401 over 100 deg); "
                    "default 0.5; --resolution is the old spelling")
     p.add_argument("--units", choices=("mm", "cm"), default=None, help="range unit mode (default mm)")
