@@ -341,11 +341,15 @@ def count(lo: int = 1, hi: int | None = None) -> Callable[[str], float]:
     parse_number = number(lo, hi, integer=True)
     if hi is not None:
         return parse_number
+    beyond = f"must be a whole number >= {lo} and at most 2^63 - 1, got {{!r}}"
 
     def parse(text: str) -> float:
+        digits = text.strip().removeprefix("+").lstrip("0")
+        if digits.isascii() and digits.isdigit() and len(digits) > 19:  # beyond 2^63 - 1 whatever its size: 309
+            raise argparse.ArgumentTypeError(beyond.format(text))  # digits said "too large for a float", 5,000 "not a whole number"
         value = parse_number(text)
         if value > MAX_COUNT:
-            raise argparse.ArgumentTypeError(f"must be a whole number >= {lo} and at most 2^63 - 1, got {text!r}")
+            raise argparse.ArgumentTypeError(beyond.format(text))
         return value
 
     parse.__name__ = "integer"
@@ -677,7 +681,9 @@ def check_log(path: str | os.PathLike) -> Path:
     folder) of a ``lmsbench simulate`` run that did not finish (check_simulate_finished)."""
     if not str(path).strip():  # Path("") is the current folder
         raise InputError(f"empty path {str(path)!r} given as a log; give {'a CARMEN log, ROS 1 .bag or ROS 2 bag folder'}")
-    p = Path(path)
+    from lms200.logs import path_of
+
+    p = path_of(path)  # a name beyond NAME_MAX: p.exists() raised OSError, "File name too long"
     check_simulate_finished(p)
     what = "a CARMEN log, ROS 1 .bag or ROS 2 bag folder"
     if not p.exists():

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -231,7 +232,7 @@ def main(argv: list[str] | None = None) -> int:
     shortest = min_duration()
     ap.add_argument("--duration", type=number(shortest, MAX_DURATION_S, unit="s"), default=90.0,
                     help=f"duration (s) of each simulated run, at least {shortest:g}: two scans at 5 scans/s (default 90)")
-    ap.add_argument("--mit", type=_mit, default=MIT_LOG if MIT_LOG.exists() else None,
+    ap.add_argument("--mit", type=_mit, default=MIT_LOG,
                     help="MIT CSAIL log, with its NAME.relations beside it, or 'none' for no MIT CSAIL run (default: "
                          "shared/data/carmen/mit-csail.clf.gz beside the checkout, none where absent)")
     ap.add_argument("--long", type=_long, default=900.0, help="duration (s) of the consistency run (default 900; 0: none)")
@@ -249,9 +250,14 @@ def _mit(text: str) -> Path | None:
     did not exist was passed over in silence, and the run wrote no MIT CSAIL table)."""
     if text.strip().lower() == "none":
         return None
+    from experiments.options import check_log
+    from lms200 import LmsbenchError
+
     path = path_arg(text)
-    if not path.exists():
-        raise argparse.ArgumentTypeError(f"{text}: no such file (give 'none' for no MIT CSAIL run)")
+    try:  # as `lmsbench slam` checks a log: what stands in its place, a name too long (a traceback here)
+        check_log(path)
+    except LmsbenchError as exc:
+        raise argparse.ArgumentTypeError(f"{exc} (give 'none' for no MIT CSAIL run)") from None
     return path
 
 
@@ -271,6 +277,10 @@ def _run(args: argparse.Namespace) -> int:
     as if it were this run's."""
     # the log read (and so checked) whole before anything is removed: a --mit file that was no log was
     # refused after the earlier run's outputs (hours of runs) were gone
+    if args.mit == MIT_LOG and not MIT_LOG.exists():  # the default (a --mit given is checked when parsed)
+        print(f"no MIT CSAIL log at {MIT_LOG}: no MIT CSAIL run (give --mit LOG, or --mit none to say so)",
+              file=sys.stderr)
+        args.mit = None
     data = None if args.mit is None else read_mit(args.mit)
     args.out.mkdir(parents=True, exist_ok=True)
     # before any is written: a stopped run leaves no mix; only the files an earlier run's record tells as its own

@@ -236,8 +236,11 @@ CASES = [
     # a whole number of 400 digits was a traceback (OverflowError in the bound check) in every integer option
     (["simulate", "--seed", "9" * 400, "--out", O], "argument --seed: must be a whole number >= 0 and <= 4294967295, "
      "got '" + "9" * 40 + "...99999999' (400 characters)"),
-    (["compare", "office:0", "--max-scans", "9" * 400, "--out", O], "argument --max-scans: must be a whole number >= 1, "
-     "got '" + "9" * 40 + "...99999999' (400 characters) (too large for a float)"),
+    (["compare", "office:0", "--max-scans", "9" * 400, "--out", O], "argument --max-scans: must be a whole number >= 1 "
+     "and at most 2^63 - 1, got '" + "9" * 40 + "...99999999' (400 characters)"),  # "(too large for a float)"
+    # 5,000 digits (past int()'s 4,300) said "must be a whole number >= 1", which it is (review of probe 13)
+    (["compare", "office:0", "--stride", "+" + "0" * 9 + "9" * 5000, "--out", O], "argument --stride: must be a whole "
+     "number >= 1 and at most 2^63 - 1, got '+000000000" + "9" * 30 + "...99999999' (5010 characters)"),
     (["slam", "{good.clf}", "--every", "9" * 400, "--out", O], "argument --every/--stride: must be a whole number >= 1"),
     (["simulate", "--rate-hz", "-3", "--out", O], "--rate-hz"),
     (["simulate", "--rate-hz", "0", "--out", O], "--rate-hz"),

@@ -212,8 +212,8 @@ def test_the_slam_evaluations_options_are_checked_as_the_commands_are(tmp_path: 
     assert not (tmp_path / "o").exists()
 
 
-def test_the_slam_evaluations_shortest_duration_keeps_two_scans_at_each_rate(tmp_path: Path,
-                                                                           capsys: pytest.CaptureFixture[str]) -> None:
+def test_the_slam_evaluations_shortest_duration_keeps_two_scans_at_each_rate(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
     """--duration's minimum is the shortest run that keeps two scans at each rate (the ATE's fewest), as the
     simulator keeps them, and a run of it leaves only its own outputs in an earlier run's folder; an existing
     file as --out was a FileExistsError traceback, `--out ""` wrote into the current folder: one line, exit 2."""
@@ -246,14 +246,19 @@ def test_the_slam_evaluations_shortest_duration_keeps_two_scans_at_each_rate(tmp
         (out / name).write_text("an earlier run's\n")
     (out / slameval.RECORD).write_text(slameval.record(argparse.Namespace(seeds=[0, 1], duration=1.0, long=0.0,
                                                                           mit=None)))
-    assert slameval.main(["--out", str(out), "--seeds", "0", "--long", "0", "--mit", "none",
-                          "--duration", f"{shortest:g}"]) == 0
+    # no --mit, and no log where the default looks: said on stderr (the run passed over it in silence)
+    monkeypatch.setattr(slameval, "MIT_LOG", tmp_path / "shared" / "mit-csail.clf.gz")
+    assert slameval.main(["--out", str(out), "--seeds", "0", "--long", "0", "--duration", f"{shortest:g}"]) == 0
     assert sorted(p.name for p in out.iterdir()) == sorted([slameval.RECORD, "sim.parquet", "tables.md"])
     assert SLAMEVAL_OWNER.told(out) == {slameval.RECORD}
     assert load_yaml((out / slameval.RECORD).read_text())["seeds"] == "0"
     table = read_parquet(out / "sim.parquet")  # two scans or more at each rate (the simulator's, as run)
     assert sorted(table.rate_hz) == sorted(slameval.RATES_HZ) and set(table.seed) == {0} and table.scans.min() >= 2
-    assert (out / "tables.md").read_text().strip() in capsys.readouterr().out
+    said = capsys.readouterr()
+    assert (out / "tables.md").read_text().strip() in said.out
+    assert said.err == (f"no MIT CSAIL log at {tmp_path / 'shared' / 'mit-csail.clf.gz'}: no MIT CSAIL run (give --mit "
+                        "LOG, or --mit none to say so)\n")
+    assert load_yaml((out / slameval.RECORD).read_text())["mit"] is None
     assert len(simulate_records("office", seed=0, duration=shortest - 0.01, rate_hz=min(slameval.RATES_HZ))) == 1
     (tmp_path / "f").write_text("mine\n")
     with pytest.raises(SystemExit) as stop:
@@ -315,7 +320,9 @@ def test_the_slam_evaluation_reads_its_log_before_it_removes_an_earlier_runs_out
     bare.write_text("".join(f"FLASER 181 {' '.join(['2.00'] * 181)} 0 0 0 0 0 0 {t:g} host {t:g}\n" for t in (0, 0.2, 0.4)))
     gone = tmp_path / "mit-csail.clf.gz"  # a log given that is not there was passed over, and no MIT CSAIL table written
     for log, says in [(bad, f"{bad}: not a CARMEN log"), (bare, f"--mit {bare}: no relations file beside it"),
-                      (gone, f"argument --mit: {gone}: no such file (give 'none' for no MIT CSAIL run)")]:
+                      (gone, f"argument --mit: {gone}: no such log (give 'none' for no MIT CSAIL run)"),
+                      # a name beyond NAME_MAX was an OSError traceback ("File name too long")
+                      (tmp_path / ("x" * 300), "argument --mit: path: a name of 300 bytes")]:
         with pytest.raises(SystemExit) as stop:
             slameval.main(["--out", str(out), "--seeds", "0", "--long", "0", "--mit", str(log)])
         assert stop.value.code == 2
