@@ -69,7 +69,7 @@ class _Poses:
 @dataclass
 class ScanRows:
     """What :class:`LogScans` holds of each scan kept, appended one scan at a time as :func:`load_input`
-    reads the log: its number in the log, stamp, a CRC-32 of its ranges, its beam geometry's row in
+    reads the log: its number in the log, stamp, a CRC-32 of its record (:func:`_crc`), its beam geometry's row in
     ``geometries`` (beams, angle_increment rad, range_max m) and its poses."""
 
     numbers: Column = field(default_factory=lambda: Column(np.int64))
@@ -85,7 +85,7 @@ class ScanRows:
         scan = rec.scan
         self.numbers.append(number)
         self.stamps.append(scan.stamp)
-        self.crcs.append(_crc(scan))
+        self.crcs.append(_crc(rec))
         self.shapes.append(self.geometries.setdefault((len(scan), float(scan.angle_increment), float(scan.range_max)),
                                                       len(self.geometries)))
         self.odom.append(rec.odom)
@@ -96,19 +96,28 @@ class ScanRows:
         return self.numbers.size
 
 
-def _crc(scan: Any) -> int:  # noqa: ANN401 - an lms200.Scan
-    """A CRC-32 of a scan's ranges (float64 bytes): a pass that reads the log again checks it read the same scan."""
-    return zlib.crc32(np.ascontiguousarray(scan.ranges, dtype=np.float64).tobytes())
+def _crc(rec: Record) -> int:
+    """A CRC-32 of all a record gives a run (float64 bytes): its scan's ranges, then its stamp, beam geometry
+    (angle_min, angle_increment, range_min, range_max, beams) and poses (odometry, true, corrected; nan for
+    none). A pass that reads the log again checks it read the same record: a log whose odometry alone changed
+    between passes ran on, the raw odometry scored from the first read and the odometry baseline on the new."""
+    scan = rec.scan
+    crc = zlib.crc32(np.ascontiguousarray(scan.ranges, dtype=np.float64).tobytes())
+    rest = [scan.stamp, scan.angle_min, scan.angle_increment, scan.range_min, scan.range_max, len(scan)]
+    for pose in (rec.odom, rec.truth, rec.corrected):
+        rest.extend(_NO_POSE if pose is None else pose)
+    return zlib.crc32(np.array(rest, dtype=np.float64).tobytes(), crc)
 
 
 class LogScans:
     """The scans :func:`load_input` kept of a log, read again from it at each pass (``for rec in
     scans``): a run holds one compact row a scan (its number in the log, stamp, beam geometry, poses
-    and a CRC-32 of its ranges: 48 to 96 B), not the scans (3.6 KB a scan of MIT CSAIL, 361 beams),
-    so that ``lmsbench slam`` keeps about what its SLAM runs keep (docs/slam.md, ``lmsbench slam``). A pass
+    and a CRC-32 of its record: 48 to 96 B), not the scans (3.6 KB a scan of MIT CSAIL, 361 beams), so
+    that ``lmsbench slam`` keeps about what its SLAM runs keep (docs/slam.md, ``lmsbench slam``). A pass
     reads the whole log up to its last scan kept with a reader of its own (``open_log()``; MIT CSAIL's 1,988
     scans: 0.3 s), the reader's warnings unsaid (the first read said them), and raises LmsbenchError where
-    a scan differs from the first read's (stamp or ranges) or the log ends before it: the file changed.
+    a record differs from the first read's (its stamp, ranges, beam geometry or poses) or the log ends
+    before it: the file changed.
 
     Sized and re-iterable, as a list of the records was; ``scans[k]`` is a pass up to scan ``k``."""
 
@@ -170,10 +179,11 @@ class LogScans:
                 finally:
                     warnings.showwarning = say
                 if rec is not None and read == wanted[j] and (rec.scan.stamp != self.stamps[j]
-                                                             or _crc(rec.scan) != self.crcs[j]):
+                                                             or _crc(rec) != self.crcs[j]):
                     raise LmsbenchError(
                         f"{self.where}: scan {read} is not the one read before (its stamp {fixed(rec.scan.stamp)} s, "
-                        f"first read {fixed(self.stamps[j])} s, or its ranges differ): the file changed while the run "
+                        f"first read {fixed(self.stamps[j])} s, or its ranges, beam geometry or poses differ): the "
+                        "file changed while the run "
                         "read it (a SLAM run reads its log again for each pass over the scans); run again once no "
                         "program writes it")
                 self.read_seconds += time.perf_counter() - wall

@@ -16,9 +16,11 @@ N_SCANS = 800
 BEAMS = 181
 
 
-def _flaser(k: int, stamp: float, beams: int = BEAMS) -> str:
+def _flaser(k: int, stamp: float, beams: int = BEAMS, x: float | None = None) -> str:
+    """Scan ``k``'s FLASER line: its laser pose and odometry at ``x`` m (0.01 k m by default)."""
     ranges = " ".join(f"{2.0 + 0.01 * ((k + b) % 97):.2f}" for b in range(beams))
-    return f"FLASER {beams} {ranges} {0.01 * k:.4f} 0 0 {0.01 * k:.4f} 0 0 {stamp:.6f} host {stamp:.6f}\n"
+    x = 0.01 * k if x is None else x
+    return f"FLASER {beams} {ranges} {x:.4f} 0 0 {x:.4f} 0 0 {stamp:.6f} host {stamp:.6f}\n"
 
 
 @pytest.fixture(scope="module")
@@ -57,8 +59,8 @@ def test_the_input_stage_keeps_a_compact_row_a_scan(long_log, monkeypatch):
 
 
 def test_a_log_changed_between_passes_is_refused(tmp_path):
-    """A pass reads the log again: a scan that is not the one read first (its ranges rewritten in place,
-    or the log cut) is an error naming the file, not a run on other scans than the checks saw."""
+    """A pass reads the log again: a scan that is not the one read first (its ranges or its odometry
+    rewritten in place, or the log cut) is an error naming the file, not a run on other scans than the checks saw."""
     path = tmp_path / "log.clf"
     path.write_text("".join(_flaser(k, 10.0 + 0.1 * k, 11) for k in range(20)))
     data = load_input(path, every=2)
@@ -66,8 +68,13 @@ def test_a_log_changed_between_passes_is_refused(tmp_path):
     assert data.records[-1].scan.stamp == pytest.approx(11.8) and data.records[3].scan.stamp == pytest.approx(10.6)
     lines = path.read_text().splitlines(keepends=True)
     path.write_text("".join(lines[:6]) + _flaser(7, 10.6, 11) + "".join(lines[7:]))  # scan 6's ranges: scan 7's
-    with pytest.raises(LmsbenchError, match=r"log.clf: scan 6 is not the one read before \(its stamp 10.600000 s, "
-                                            r"first read 10.600000 s, or its ranges differ\): the file changed"):
+    changed = r"log.clf: scan 6 is not the one read before \(its stamp 10.600000 s, first read 10.600000 s, or its " \
+              r"ranges, beam geometry or poses differ\): the file changed"
+    with pytest.raises(LmsbenchError, match=changed):
+        list(data.records)
+    # its odometry alone: the raw odometry was scored from the first read, the odometry baseline ran on the new
+    path.write_text("".join(lines[:6]) + _flaser(6, 10.6, 11, x=5.0) + "".join(lines[7:]))
+    with pytest.raises(LmsbenchError, match=changed):
         list(data.records)
     path.write_text("".join(lines[:9]))
     with pytest.raises(LmsbenchError, match=r"log.clf: ended after 9 records on reading it again, before its scan 10 "
