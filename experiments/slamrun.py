@@ -9,9 +9,11 @@ metrics.json (scores, timing, consistency, the loop closures), config.yaml, slam
 from __future__ import annotations
 
 import dataclasses
+import functools
 import io
 import json
 import time
+import weakref
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -38,8 +40,8 @@ from slam.metrics import Alignment2D, ate, interpolate_poses, map_error, read_re
 MIT_ANCHORS = {"scan matching": 0.106, "GMapping": 0.049, "graph SLAM": 0.004, "raw odometry": 1.70}
 
 
-#: scans whose identity a pass of :class:`LogScans` keeps (:meth:`LogScans.index_of`): a user
-#: extractor's failure names its scan by it; the paper preset extracts ``slam.run.EXTRACT_BATCH`` at once
+#: scans whose identity a pass of :class:`LogScans` keeps, weakly, while they live (:meth:`LogScans.index_of`): a
+#: user extractor's failure names its scan by it; the paper preset extracts ``slam.run.EXTRACT_BATCH`` at once
 RECENT_SCANS = 1024
 _NO_POSE = (np.nan, np.nan, np.nan)
 
@@ -130,7 +132,9 @@ class LogScans:
         self.shapes: np.ndarray = rows.shapes.taken()  # rows of ``geometries``
         self.geometries: list[tuple[int, float, float]] = list(rows.geometries)  # (beams, angle_increment, range_max)
         self.odom, self.truth, self.corrected = rows.odom.taken(), rows.truth.taken(), rows.corrected.taken()
-        self._recent: dict[int, int] = {}  # id(scan) -> its index, the last RECENT_SCANS scans given
+        # id(scan) -> (a weak reference to it, its index) of the scans the last pass gave that live, the last
+        # RECENT_SCANS at most: no scan is kept alive, and a new object at a freed scan's address is none of them
+        self._recent: dict[int, tuple[weakref.ref, int]] = {}
         self.read_seconds = self.read_cpu_seconds = 0.0  # wall-clock and CPU time the passes spent reading the log
 
     def __len__(self) -> int:
@@ -165,7 +169,8 @@ class LogScans:
             return
         import warnings
 
-        self._recent = {}
+        recent: dict[int, tuple[weakref.ref, int]] = {}
+        self._recent = recent
         wanted = self.numbers[:n].tolist()
         j = read = 0
         records = iter(self.open_log())
@@ -193,10 +198,11 @@ class LogScans:
                 k, read = read, read + 1
                 if k != wanted[j]:
                     continue
-                self._recent.pop(id(rec.scan), None)
-                self._recent[id(rec.scan)] = j
-                if len(self._recent) > RECENT_SCANS:
-                    del self._recent[next(iter(self._recent))]
+                key = id(rec.scan)
+                recent.pop(key, None)
+                recent[key] = (weakref.ref(rec.scan, functools.partial(_forget, recent, key)), j)
+                if len(recent) > RECENT_SCANS:
+                    del recent[next(iter(recent))]
                 yield rec
                 j += 1
                 if j == n:
@@ -211,10 +217,10 @@ class LogScans:
 
     def index_of(self, scan: Any) -> int | None:  # noqa: ANN401 - an lms200.Scan
         """The index of ``scan`` among these: by identity among the last RECENT_SCANS scans of the last
-        pass, else the first of its stamp (a driver's copy, e.g. a de-skewed one); None for neither."""
-        k = self._recent.get(id(scan))
-        if k is not None:
-            return k
+        pass still alive, else the first of its stamp (a driver's copy, e.g. a de-skewed one); None for neither."""
+        hit = self._recent.get(id(scan))
+        if hit is not None and hit[0]() is scan:
+            return hit[1]
         stamp = getattr(scan, "stamp", None)
         if not isinstance(stamp, float):
             return None
@@ -240,6 +246,12 @@ class LogScans:
         for i, stamp in enumerate(self.stamps.tolist()):
             yield _Light(_Stamped(stamp), *(None if a is None or np.isnan(a[i, 0]) else tuple(a[i].tolist())
                                             for a in (self.odom, self.truth, self.corrected)))
+
+
+def _forget(recent: dict[int, tuple[weakref.ref, int]], key: int, ref: weakref.ref) -> None:
+    """Drop ``recent[key]`` if it is still the entry of ``ref``, whose scan was freed (:meth:`LogScans.index_of`)."""
+    if recent.get(key, (None,))[0] is ref:
+        del recent[key]
 
 
 @dataclass(frozen=True)

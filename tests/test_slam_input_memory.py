@@ -80,3 +80,26 @@ def test_a_log_changed_between_passes_is_refused(tmp_path):
     with pytest.raises(LmsbenchError, match=r"log.clf: ended after 9 records on reading it again, before its scan 10 "
                                             r"read before: the file changed"):
         list(data.records)
+
+
+def test_index_of_names_no_scan_at_a_freed_scans_address(tmp_path):
+    """A user extractor's failure names its scan by identity among a pass's scans: a scan freed since, its
+    address taken by a new object (CPython reuses it), was named as the freed one's index."""
+    import dataclasses
+
+    path = tmp_path / "log.clf"
+    path.write_text("".join(_flaser(k, 10.0 + 0.1 * k, 11) for k in range(8)))
+    records = load_input(path).records
+    kept = [rec.scan for rec in records]
+    assert [records.index_of(s) for s in kept] == list(range(8))  # alive: by identity
+    freed = {id(s) for s in kept}
+    template = kept[0]
+    del kept
+    fresh = []  # new scans of a stamp no scan has, until one lands at a freed scan's address
+    for _ in range(1000):
+        fresh.append(dataclasses.replace(template, stamp=99.0))
+        if id(fresh[-1]) in freed:
+            break
+    else:
+        pytest.skip("no new scan took a freed scan's address")
+    assert records.index_of(fresh[-1]) is None
