@@ -17,7 +17,7 @@ import weakref
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Collection, Iterable, Iterator, Sequence
+from typing import Any, Callable, Collection, Iterable, Iterator, Sequence, overload
 
 import numpy as np
 import yaml
@@ -121,7 +121,8 @@ class LogScans:
     a record differs from the first read's (its stamp, ranges, beam geometry or poses) or the log ends
     before it: the file changed.
 
-    Sized and re-iterable, as a list of the records was; ``scans[k]`` is a pass up to scan ``k``."""
+    Sized and re-iterable, as a list of the records was; ``scans[k]`` is a pass up to scan ``k``, ``scans[i:j]``
+    (a step too) those scans as a LogScans; ``list(scans)`` holds them all in memory."""
 
     def __init__(self, open_log: Callable[[], Iterable[Record]], where: str, rows: ScanRows | None = None) -> None:
         rows = rows if rows is not None else ScanRows()
@@ -141,8 +142,10 @@ class LogScans:
         return int(self.numbers.size)
 
     def taken(self, keep: Sequence[int] | np.ndarray) -> "LogScans":
-        """These scans at the indices ``keep`` (in order), read from the same log."""
+        """These scans at the indices ``keep`` (rising), read from the same log."""
         keep = np.asarray(keep, dtype=np.int64)
+        if keep.size > 1 and not (np.diff(keep) > 0).all():  # a pass reads the log once, in order
+            raise ValueError("LogScans.taken: the indices must rise (a pass reads the log in its order)")
         out = LogScans(self.open_log, self.where)
         out.numbers, out.stamps, out.crcs, out.shapes = (a[keep] for a in (self.numbers, self.stamps, self.crcs, self.shapes))
         out.geometries = self.geometries
@@ -152,9 +155,21 @@ class LogScans:
     def __iter__(self) -> Iterator[Record]:
         return self._pass(len(self))
 
-    def __getitem__(self, k: int) -> Record:
+    @overload
+    def __getitem__(self, k: int) -> Record: ...
+
+    @overload
+    def __getitem__(self, k: slice) -> "LogScans": ...
+
+    def __getitem__(self, k: int | slice) -> "Record | LogScans":
+        """Scan ``k`` (a pass up to it), or for a slice those scans as a LogScans (read again at each pass)."""
+        if isinstance(k, slice):
+            if k.step is not None and k.step < 0:
+                raise ValueError("LogScans slices run forward (a pass reads the log in its order): "
+                                 "list(records)[i:j:step] holds the records and takes any slice")
+            return self.taken(np.arange(len(self))[k])
         if isinstance(k, bool) or not isinstance(k, (int, np.integer)):
-            raise TypeError(f"LogScans indices must be integers, got {type(k).__name__}")
+            raise TypeError(f"LogScans indices must be integers or slices, got {type(k).__name__}")
         k = int(k) + len(self) if k < 0 else int(k)
         if not 0 <= k < len(self):
             raise IndexError(f"scan index {k} out of range ({len(self)} scans)")

@@ -103,3 +103,19 @@ def test_index_of_names_no_scan_at_a_freed_scans_address(tmp_path):
     else:
         pytest.skip("no new scan took a freed scan's address")
     assert records.index_of(fresh[-1]) is None
+
+
+def test_records_slice_as_a_list_did(tmp_path):
+    """load_input's records are read again at each pass; a slice of them (records[1:3], a list of records
+    before) is those scans, read from the log likewise, not a TypeError."""
+    path = tmp_path / "log.clf"
+    path.write_text("".join(_flaser(k, 10.0 + 0.1 * k, 11) for k in range(8)))
+    data = load_input(path, every=2)  # scans 0, 2, 4, 6 of the log
+    held = list(data.records)
+    part = data.records[1:3]
+    assert len(part) == 2 and part.numbers.tolist() == [2, 4]
+    assert [r.scan.stamp for r in part] == [r.scan.stamp for r in held[1:3]]
+    assert [r.scan.stamp for r in data.records[::2]] == [r.scan.stamp for r in held[::2]]
+    assert part[-1].scan.stamp == held[2].scan.stamp
+    with pytest.raises(ValueError, match="run forward"):
+        data.records[::-1]
