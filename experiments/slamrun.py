@@ -114,12 +114,12 @@ def _crc(rec: Record) -> int:
 class LogScans:
     """The scans :func:`load_input` kept of a log, read again from it at each pass (``for rec in
     scans``): a run holds one compact row a scan (its number in the log, stamp, beam geometry, poses
-    and a CRC-32 of its record: 48 to 96 B), not the scans (3.6 KB a scan of MIT CSAIL, 361 beams), so
+    and a CRC-32 of its record: 48 to 96 B), not the scans (3.5 KB a scan of MIT CSAIL, 361 beams), so
     that ``lmsbench slam`` keeps about what its SLAM runs keep (docs/slam.md, ``lmsbench slam``). A pass
     reads the whole log up to its last scan kept with a reader of its own (``open_log()``; MIT CSAIL's 1,988
-    scans: 0.3 s), the reader's warnings unsaid (the first read said them), and raises LmsbenchError where
-    a record differs from the first read's (its stamp, ranges, beam geometry or poses) or the log ends
-    before it: the file changed.
+    scans: 0.7 s at load 5 on 2 cores), the reader's warnings unsaid (the first read said them), and raises
+    LmsbenchError where a record differs from the first read's (its stamp, ranges, beam geometry or poses)
+    or the log ends before it: the file changed.
 
     Sized and re-iterable, as a list of the records was; ``scans[k]`` is a pass up to scan ``k``, ``scans[i:j]``
     (a step too) those scans as a LogScans; ``list(scans)`` holds them all in memory."""
@@ -203,9 +203,8 @@ class LogScans:
                     raise LmsbenchError(
                         f"{self.where}: scan {read} is not the one read before (its stamp {fixed(rec.scan.stamp)} s, "
                         f"first read {fixed(self.stamps[j])} s, or its ranges, beam geometry or poses differ): the "
-                        "file changed while the run "
-                        "read it (a SLAM run reads its log again for each pass over the scans); run again once no "
-                        "program writes it")
+                        "file changed while the run read it (a SLAM run reads its log again for each pass over the "
+                        "scans); run again once no program writes it")
                 self.read_seconds += time.perf_counter() - wall
                 self.read_cpu_seconds += time.process_time() - cpu
                 if rec is None:

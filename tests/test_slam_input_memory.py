@@ -1,5 +1,5 @@
 """``lmsbench slam``'s input stage keeps a compact row a scan, not the scans: ``load_input`` held every
-record of the log (4.0 KB a scan of 361 beams, 10x what the SLAM run keeps), now it keeps stamps, numbers,
+record of the log (3.5 KB a scan of MIT CSAIL's 361 beams, 10x what the SLAM run keeps), now it keeps stamps, numbers,
 poses and a CRC of the ranges, and each pass over ``data.records`` reads the log again."""
 
 from __future__ import annotations
