@@ -9,13 +9,15 @@ metrics.json (scores, timing, consistency, the loop closures), config.yaml, slam
 from __future__ import annotations
 
 import dataclasses
+import functools
 import io
 import json
 import time
+import weakref
 import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Collection, Iterable, Iterator, Sequence
+from typing import Any, Callable, Collection, Iterable, Iterator, Sequence, overload
 
 import numpy as np
 import yaml
@@ -38,8 +40,8 @@ from slam.metrics import Alignment2D, ate, interpolate_poses, map_error, read_re
 MIT_ANCHORS = {"scan matching": 0.106, "GMapping": 0.049, "graph SLAM": 0.004, "raw odometry": 1.70}
 
 
-#: scans whose identity a pass of :class:`LogScans` keeps (:meth:`LogScans.index_of`): a user
-#: extractor's failure names its scan by it; the paper preset extracts ``slam.run.EXTRACT_BATCH`` at once
+#: scans whose identity a pass of :class:`LogScans` keeps, weakly, while they live (:meth:`LogScans.index_of`): a
+#: user extractor's failure names its scan by it; the paper preset extracts ``slam.run.EXTRACT_BATCH`` at once
 RECENT_SCANS = 1024
 _NO_POSE = (np.nan, np.nan, np.nan)
 
@@ -69,7 +71,7 @@ class _Poses:
 @dataclass
 class ScanRows:
     """What :class:`LogScans` holds of each scan kept, appended one scan at a time as :func:`load_input`
-    reads the log: its number in the log, stamp, a CRC-32 of its ranges, its beam geometry's row in
+    reads the log: its number in the log, stamp, a CRC-32 of its record (:func:`_crc`), its beam geometry's row in
     ``geometries`` (beams, angle_increment rad, range_max m) and its poses."""
 
     numbers: Column = field(default_factory=lambda: Column(np.int64))
@@ -85,7 +87,7 @@ class ScanRows:
         scan = rec.scan
         self.numbers.append(number)
         self.stamps.append(scan.stamp)
-        self.crcs.append(_crc(scan))
+        self.crcs.append(_crc(rec))
         self.shapes.append(self.geometries.setdefault((len(scan), float(scan.angle_increment), float(scan.range_max)),
                                                       len(self.geometries)))
         self.odom.append(rec.odom)
@@ -96,21 +98,31 @@ class ScanRows:
         return self.numbers.size
 
 
-def _crc(scan: Any) -> int:  # noqa: ANN401 - an lms200.Scan
-    """A CRC-32 of a scan's ranges (float64 bytes): a pass that reads the log again checks it read the same scan."""
-    return zlib.crc32(np.ascontiguousarray(scan.ranges, dtype=np.float64).tobytes())
+def _crc(rec: Record) -> int:
+    """A CRC-32 of all a record gives a run (float64 bytes): its scan's ranges, then its stamp, beam geometry
+    (angle_min, angle_increment, range_min, range_max, beams) and poses (odometry, true, corrected; nan for
+    none). A pass that reads the log again checks it read the same record: a log whose odometry alone changed
+    between passes ran on, the raw odometry scored from the first read and the odometry baseline on the new."""
+    scan = rec.scan
+    crc = zlib.crc32(np.ascontiguousarray(scan.ranges, dtype=np.float64).tobytes())
+    rest = [scan.stamp, scan.angle_min, scan.angle_increment, scan.range_min, scan.range_max, len(scan)]
+    for pose in (rec.odom, rec.truth, rec.corrected):
+        rest.extend(_NO_POSE if pose is None else pose)
+    return zlib.crc32(np.array(rest, dtype=np.float64).tobytes(), crc)
 
 
 class LogScans:
     """The scans :func:`load_input` kept of a log, read again from it at each pass (``for rec in
     scans``): a run holds one compact row a scan (its number in the log, stamp, beam geometry, poses
-    and a CRC-32 of its ranges: 48 to 96 B), not the scans (3.6 KB a scan of MIT CSAIL, 361 beams),
-    so that ``lmsbench slam`` keeps about what its SLAM runs keep (docs/slam.md, ``lmsbench slam``). A pass
+    and a CRC-32 of its record: 48 to 96 B), not the scans (3.5 KB a scan of MIT CSAIL, 361 beams), so
+    that ``lmsbench slam`` keeps about what its SLAM runs keep (docs/slam.md, ``lmsbench slam``). A pass
     reads the whole log up to its last scan kept with a reader of its own (``open_log()``; MIT CSAIL's 1,988
-    scans: 0.3 s), the reader's warnings unsaid (the first read said them), and raises LmsbenchError where
-    a scan differs from the first read's (stamp or ranges) or the log ends before it: the file changed.
+    scans: 0.7 s at load 5 on 2 cores), the reader's warnings unsaid (the first read said them), and raises
+    LmsbenchError where a record differs from the first read's (its stamp, ranges, beam geometry or poses)
+    or the log ends before it: the file changed.
 
-    Sized and re-iterable, as a list of the records was; ``scans[k]`` is a pass up to scan ``k``."""
+    Sized and re-iterable, as a list of the records was; ``scans[k]`` is a pass up to scan ``k``, ``scans[i:j]``
+    (a step too) those scans as a LogScans; ``list(scans)`` holds them all in memory."""
 
     def __init__(self, open_log: Callable[[], Iterable[Record]], where: str, rows: ScanRows | None = None) -> None:
         rows = rows if rows is not None else ScanRows()
@@ -121,15 +133,19 @@ class LogScans:
         self.shapes: np.ndarray = rows.shapes.taken()  # rows of ``geometries``
         self.geometries: list[tuple[int, float, float]] = list(rows.geometries)  # (beams, angle_increment, range_max)
         self.odom, self.truth, self.corrected = rows.odom.taken(), rows.truth.taken(), rows.corrected.taken()
-        self._recent: dict[int, int] = {}  # id(scan) -> its index, the last RECENT_SCANS scans given
+        # id(scan) -> (a weak reference to it, its index) of the scans the last pass gave that live, the last
+        # RECENT_SCANS at most: no scan is kept alive, and a new object at a freed scan's address is none of them
+        self._recent: dict[int, tuple[weakref.ref, int]] = {}
         self.read_seconds = self.read_cpu_seconds = 0.0  # wall-clock and CPU time the passes spent reading the log
 
     def __len__(self) -> int:
         return int(self.numbers.size)
 
     def taken(self, keep: Sequence[int] | np.ndarray) -> "LogScans":
-        """These scans at the indices ``keep`` (in order), read from the same log."""
+        """These scans at the indices ``keep`` (rising), read from the same log."""
         keep = np.asarray(keep, dtype=np.int64)
+        if keep.size > 1 and not (np.diff(keep) > 0).all():  # a pass reads the log once, in order
+            raise ValueError("LogScans.taken: the indices must rise (a pass reads the log in its order)")
         out = LogScans(self.open_log, self.where)
         out.numbers, out.stamps, out.crcs, out.shapes = (a[keep] for a in (self.numbers, self.stamps, self.crcs, self.shapes))
         out.geometries = self.geometries
@@ -139,9 +155,21 @@ class LogScans:
     def __iter__(self) -> Iterator[Record]:
         return self._pass(len(self))
 
-    def __getitem__(self, k: int) -> Record:
+    @overload
+    def __getitem__(self, k: int) -> Record: ...
+
+    @overload
+    def __getitem__(self, k: slice) -> "LogScans": ...
+
+    def __getitem__(self, k: int | slice) -> "Record | LogScans":
+        """Scan ``k`` (a pass up to it), or for a slice those scans as a LogScans (read again at each pass)."""
+        if isinstance(k, slice):
+            if k.step is not None and k.step < 0:
+                raise ValueError("LogScans slices run forward (a pass reads the log in its order): "
+                                 "list(records)[i:j:step] holds the records and takes any slice")
+            return self.taken(np.arange(len(self))[k])
         if isinstance(k, bool) or not isinstance(k, (int, np.integer)):
-            raise TypeError(f"LogScans indices must be integers, got {type(k).__name__}")
+            raise TypeError(f"LogScans indices must be integers or slices, got {type(k).__name__}")
         k = int(k) + len(self) if k < 0 else int(k)
         if not 0 <= k < len(self):
             raise IndexError(f"scan index {k} out of range ({len(self)} scans)")
@@ -156,7 +184,8 @@ class LogScans:
             return
         import warnings
 
-        self._recent = {}
+        recent: dict[int, tuple[weakref.ref, int]] = {}
+        self._recent = recent
         wanted = self.numbers[:n].tolist()
         j = read = 0
         records = iter(self.open_log())
@@ -170,12 +199,12 @@ class LogScans:
                 finally:
                     warnings.showwarning = say
                 if rec is not None and read == wanted[j] and (rec.scan.stamp != self.stamps[j]
-                                                             or _crc(rec.scan) != self.crcs[j]):
+                                                             or _crc(rec) != self.crcs[j]):
                     raise LmsbenchError(
                         f"{self.where}: scan {read} is not the one read before (its stamp {fixed(rec.scan.stamp)} s, "
-                        f"first read {fixed(self.stamps[j])} s, or its ranges differ): the file changed while the run "
-                        "read it (a SLAM run reads its log again for each pass over the scans); run again once no "
-                        "program writes it")
+                        f"first read {fixed(self.stamps[j])} s, or its ranges, beam geometry or poses differ): the "
+                        "file changed while the run read it (a SLAM run reads its log again for each pass over the "
+                        "scans); run again once no program writes it")
                 self.read_seconds += time.perf_counter() - wall
                 self.read_cpu_seconds += time.process_time() - cpu
                 if rec is None:
@@ -183,10 +212,11 @@ class LogScans:
                 k, read = read, read + 1
                 if k != wanted[j]:
                     continue
-                self._recent.pop(id(rec.scan), None)
-                self._recent[id(rec.scan)] = j
-                if len(self._recent) > RECENT_SCANS:
-                    del self._recent[next(iter(self._recent))]
+                key = id(rec.scan)
+                recent.pop(key, None)
+                recent[key] = (weakref.ref(rec.scan, functools.partial(_forget, recent, key)), j)
+                if len(recent) > RECENT_SCANS:
+                    del recent[next(iter(recent))]
                 yield rec
                 j += 1
                 if j == n:
@@ -201,10 +231,10 @@ class LogScans:
 
     def index_of(self, scan: Any) -> int | None:  # noqa: ANN401 - an lms200.Scan
         """The index of ``scan`` among these: by identity among the last RECENT_SCANS scans of the last
-        pass, else the first of its stamp (a driver's copy, e.g. a de-skewed one); None for neither."""
-        k = self._recent.get(id(scan))
-        if k is not None:
-            return k
+        pass still alive, else the first of its stamp (a driver's copy, e.g. a de-skewed one); None for neither."""
+        hit = self._recent.get(id(scan))
+        if hit is not None and hit[0]() is scan:
+            return hit[1]
         stamp = getattr(scan, "stamp", None)
         if not isinstance(stamp, float):
             return None
@@ -230,6 +260,12 @@ class LogScans:
         for i, stamp in enumerate(self.stamps.tolist()):
             yield _Light(_Stamped(stamp), *(None if a is None or np.isnan(a[i, 0]) else tuple(a[i].tolist())
                                             for a in (self.odom, self.truth, self.corrected)))
+
+
+def _forget(recent: dict[int, tuple[weakref.ref, int]], key: int, ref: weakref.ref) -> None:
+    """Drop ``recent[key]`` if it is still the entry of ``ref``, whose scan was freed (:meth:`LogScans.index_of`)."""
+    if recent.get(key, (None,))[0] is ref:
+        del recent[key]
 
 
 @dataclass(frozen=True)
