@@ -1670,7 +1670,8 @@ def test_the_clutter_options_bound_is_the_simulators():
 
 def test_huge_whole_number_beyond_a_stated_range_says_the_range_once():
     """``simulate --seed <400 nines>`` said the range and then "(too large for a float)": the range
-    already says why. An option with no upper bound (``--max-scans``) keeps the reason."""
+    already says why. An option with no upper bound of its own (``--max-scans``) says int64's, the
+    library's: it said "(too large for a float)" of a count."""
     import argparse
 
     from experiments.options import count, number
@@ -1681,7 +1682,7 @@ def test_huge_whole_number_beyond_a_stated_range_says_the_range_once():
     assert str(info.value) == f"must be a whole number >= 0 and <= 4294967295, got '{'9' * 400}'"  # shortened by the CLI
     with pytest.raises(argparse.ArgumentTypeError) as info:
         count(1)("9" * 400)
-    assert str(info.value) == f"must be a whole number >= 1, got '{'9' * 400}' (too large for a float)"
+    assert str(info.value) == f"must be a whole number >= 1 and at most 2^63 - 1, got '{'9' * 400}'"
 
 
 def test_a_log_whose_name_is_not_utf8_is_named_by_its_escapes(files, tmp_path, capsys):
