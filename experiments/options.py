@@ -681,9 +681,7 @@ def check_log(path: str | os.PathLike) -> Path:
     folder) of a ``lmsbench simulate`` run that did not finish (check_simulate_finished)."""
     if not str(path).strip():  # Path("") is the current folder
         raise InputError(f"empty path {str(path)!r} given as a log; give {'a CARMEN log, ROS 1 .bag or ROS 2 bag folder'}")
-    from lms200.logs import path_of
-
-    p = path_of(path)  # a name beyond NAME_MAX: p.exists() raised OSError, "File name too long"
+    p = Path(path)
     check_simulate_finished(p)
     what = "a CARMEN log, ROS 1 .bag or ROS 2 bag folder"
     if not p.exists():
@@ -970,6 +968,18 @@ def _csv_starts(*columns: str) -> Callable[[Path], bool]:
     return lambda path: _csv_header(path)[:len(columns)] == list(columns)
 
 
+def _parquet_has(*columns: str) -> Callable[[Path], bool]:
+    """A recogniser: a Parquet file whose columns include ``columns`` (its footer's schema alone is read)."""
+    def tells(path: Path) -> bool:
+        try:
+            import pyarrow.parquet as pq
+
+            return set(columns) <= set(pq.read_schema(path).names)
+        except Exception:  # noqa: BLE001
+            return False
+    return tells
+
+
 def _first_line(start: str) -> Callable[[Path], bool]:
     """A recogniser: a text file whose first line begins with ``start``."""
     def tells(path: Path) -> bool:
@@ -1116,7 +1126,10 @@ BENCH_OWNER = Owner("bench", {
     "bench.csv": _csv_starts("area")})  # commands.bench: {"area": name, **row}; the next column is the first area's own
 SWEEP_OWNER = Owner("sweep", {"sweep.yaml": _yaml_has("name", "kind")})  # sweep.runner.spec_record
 #: ``python -m experiments.slameval``: its slameval.yaml (written first, whole: the run's settings and versions)
+#: A folder of a run from before its slameval.yaml is told by its sim.parquet's columns (a review found
+#: such folders refused as "no earlier python -m experiments.slameval run wrote").
 SLAMEVAL_OWNER = Owner("slameval", {"slameval.yaml": _yaml_says(command="python -m experiments.slameval")},
+                       legacy={"sim.parquet": _parquet_has("seed", "rate_hz", "ate_rmse_m", "cpu_scans_per_s")},
                        program="python -m experiments.slameval")
 #: The study's settings beside its tables (figures.study.save_tables, written first).
 _STUDY_RECORD = _yaml_has("world", "seed", "duration", "resolved", dicts=("resolved",))

@@ -250,7 +250,7 @@ def _mit(text: str) -> Path | None:
     did not exist was passed over in silence, and the run wrote no MIT CSAIL table)."""
     if text.strip().lower() == "none":
         return None
-    from experiments.options import check_log
+    from experiments.options import check_log, mid_sentence
     from lms200 import LmsbenchError
 
     path = path_arg(text)
@@ -258,6 +258,8 @@ def _mit(text: str) -> Path | None:
         check_log(path)
     except LmsbenchError as exc:
         raise argparse.ArgumentTypeError(f"{exc} (give 'none' for no MIT CSAIL run)") from None
+    except OSError as exc:  # in the words of the CLI's: "NAME: file name too long"
+        raise argparse.ArgumentTypeError(f"{exc.filename or text}: {mid_sentence(exc.strerror or str(exc))}") from None
     return path
 
 

@@ -105,8 +105,8 @@ class UnitsTally:
         if share < IN_RANGE_SHARE:
             return None
         cm = self.in_range_cm / self.readings
-        unit = (f", {100 * cm:.0f} % divided by 100: ranges in millimetres or centimetres" if cm >= IN_RANGE_SHARE
-                else ": ranges in millimetres")
+        unit = (f", {100 * cm:.0f} % within an LMS200's reach divided by 100: ranges in millimetres or centimetres"
+                if cm >= IN_RANGE_SHARE else ": ranges in millimetres")
         return (f"all {self.readings:,} finite readings lie "
                 f"beyond range_max ({self.range_max:g} m), from {self.least:.6g} to {self.most:.6g}, and "
                 f"{100 * share:.0f} % of them would be in range divided by 1000{unit} "

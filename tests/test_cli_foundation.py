@@ -299,6 +299,20 @@ def test_the_slam_evaluation_replaces_only_an_earlier_runs_outputs(tmp_path: Pat
             f"python -m experiments.slameval: error: --out {out}: holds {shown}, which this run would replace but no "
             "earlier python -m experiments.slameval run wrote; give a new or empty folder"), mine
         assert {p.name: p.read_text() for p in out.iterdir()} == mine
+    # a folder written before slameval.yaml, told by its sim.parquet's columns, was refused as no earlier run's:
+    # it passes the folder's check (and the log given, no log, is refused after it)
+    import pandas as pd
+
+    old = tmp_path / "before-record"
+    old.mkdir()
+    pd.DataFrame({"seed": [0], "rate_hz": [5.0], "ate_rmse_m": [0.01], "cpu_scans_per_s": [900.0]}).to_parquet(
+        old / "sim.parquet")
+    (old / "tables.md").write_text("| seed |\n")
+    with pytest.raises(SystemExit) as stop:
+        slameval.main(["--out", str(old), "--seeds", "0", "--long", "0", "--mit", str(bad)])
+    assert stop.value.code == 2
+    assert capsys.readouterr().err.startswith(f"python -m experiments.slameval: error: {bad}: not a CARMEN log")
+    assert sorted(p.name for p in old.iterdir()) == ["sim.parquet", "tables.md"]
 
 
 def test_the_slam_evaluation_reads_its_log_before_it_removes_an_earlier_runs_outputs(
@@ -322,7 +336,7 @@ def test_the_slam_evaluation_reads_its_log_before_it_removes_an_earlier_runs_out
     for log, says in [(bad, f"{bad}: not a CARMEN log"), (bare, f"--mit {bare}: no relations file beside it"),
                       (gone, f"argument --mit: {gone}: no such log (give 'none' for no MIT CSAIL run)"),
                       # a name beyond NAME_MAX was an OSError traceback ("File name too long")
-                      (tmp_path / ("x" * 300), "argument --mit: path: a name of 300 bytes")]:
+                      (tmp_path / ("x" * 300), f"argument --mit: {tmp_path / ('x' * 300)}: file name too long")]:
         with pytest.raises(SystemExit) as stop:
             slameval.main(["--out", str(out), "--seeds", "0", "--long", "0", "--mit", str(log)])
         assert stop.value.code == 2

@@ -27,8 +27,9 @@ def test_scans_in_millimetres_are_told_and_open_space_is_not() -> None:
     # divided by 100, 20-50 m: beyond the range_max (8.183 m) but within an LMS200's reach in centimetres (81.83 m),
     # which a range_max set short does not bound: the text said "ranges in millimetres", centimetres ruled out
     assert said == ("none of the first 3 scans has a valid beam: all 1,083 finite readings lie beyond range_max (8.183 m), "
-                    "from 2000.57 to 4998.5, and 100 % of them would be in range divided by 1000, 100 % divided by 100: "
-                    "ranges in millimetres or centimetres given as metres? A Scan's ranges are metres (a reading beyond "
+                    "from 2000.57 to 4998.5, and 100 % of them would be in range divided by 1000, 100 % within an "
+                    "LMS200's reach divided by 100: ranges in millimetres or centimetres given as metres? A Scan's ranges "
+                    "are metres (a reading beyond "
                     "range_max is no return, REP-117)")
     # the same room in centimetres fires it too (divided by 1000: 0.2-0.5 m), and so does a room 5-30 m across in
     # centimetres under a range_max of 4 m: the data cannot tell them from millimetres
@@ -36,7 +37,7 @@ def test_scans_in_millimetres_are_told_and_open_space_is_not() -> None:
     assert units_problem(in_cm) == said.replace("from 2000.57 to 4998.5", "from 200.057 to 499.85")
     far_cm = [Scan.lms200(np.linspace(500.0, 3000.0, 361), range_max=4.0)]
     assert units_problem(far_cm).endswith("from 500 to 3000, and 100 % of them would be in range divided by 1000, 100 % "
-                                          "divided by 100: ranges in millimetres or centimetres given as metres? A Scan's "
+                                          "within an LMS200's reach divided by 100: ranges in millimetres or centimetres given as metres? A Scan's "
                                           "ranges are metres (a reading beyond range_max is no return, REP-117)")
     # millimetres alone where divided by 100 they lie beyond both the range_max and an LMS200's reach: 9-30 m in
     # millimetres under a range_max of 30 m (divided by 100: 90-300 m); under one of 120 m, 90-110 m lie within it
@@ -45,7 +46,7 @@ def test_scans_in_millimetres_are_told_and_open_space_is_not() -> None:
                                           "ranges in millimetres given as metres? A Scan's ranges are metres (a reading "
                                           "beyond range_max is no return, REP-117)")
     long_reach = [Scan.lms200(np.linspace(9000.0, 11000.0, 361), range_max=120.0)]
-    assert "100 % divided by 100: ranges in millimetres or centimetres" in str(units_problem(long_reach))
+    assert "100 % within an LMS200's reach divided by 100: ranges in millimetres or centimetres" in str(units_problem(long_reach))
     in_metres = [s.replace(ranges=s.ranges / 1000.0) for s in _room_mm()]
     assert all(s.valid.all() for s in in_metres) and units_problem(in_metres) is None
     quiet = {

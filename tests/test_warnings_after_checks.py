@@ -82,7 +82,7 @@ def test_a_millimetre_log_refused_says_its_units_in_the_error(logs, tmp_path, ca
                     capsys)
     assert line.startswith(f"lmsbench {command[0]}: error: {logs['mm']}: {says}"), line
     # divided by 100, 15-41 m: beyond the range_max, within an LMS200's reach in centimetres (which it does not bound)
-    assert "would be in range divided by 1000, 100 % divided by 100: ranges in millimetres or centimetres given as metres?" in line, line
+    assert "would be in range divided by 1000, 100 % within an LMS200's reach divided by 100: ranges in millimetres or centimetres given as metres?" in line, line
 
 
 def test_slams_own_warning_before_an_odometry_refusal_is_unsaid(logs, tmp_path, capsys) -> None:
