@@ -292,7 +292,6 @@ def _run(args: argparse.Namespace) -> int:
     md = []
     if data is not None:
         mit = mit_rows(data, ["paper", "default"])
-        del data  # its scans are not held through the other runs
         write_parquet(mit, args.out / "mit.parquet")
         md += [_md(mit), ""]
     if args.long > 0:
