@@ -384,7 +384,7 @@ def format_calibration(result: CalibrationResult) -> list[str]:
         f"isolated outliers      {pm(c.outlier_rate, 100, ' %')}; amid straight stretches "
         f"{pm(c.outlier_straight_rate, 100, ' %')}  -> outlier_prob {s.outlier_prob:.4g} "
         f"(simulated world alone: {result.outlier_baseline * 100:.3g} %)",
-        f"residual tail           {pm(c.tail_share, 100, ' %')} at {c.tail_sigma_m * 1000:.1f} mm  -> noise_tail_prob "
+        f"residual tail          {pm(c.tail_share, 100, ' %')} at {c.tail_sigma_m * 1000:.1f} mm  -> noise_tail_prob "
         f"{s.noise_tail_prob:.4g} at {s.noise_tail_sigma * 1000:.1f} mm",
         f"tail clustering        {pm(c.tail_clustering)}  -> noise_tail_patch_m {s.noise_tail_patch_m:g}",
         f"nan clustering         {pm(c.nan_clustering)}  -> dropout_patch_m {s.dropout_patch_m:g}",

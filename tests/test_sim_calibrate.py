@@ -838,3 +838,17 @@ def test_a_mixed_geometry_log_is_named_whatever_its_name(tmp_path, monkeypatch, 
     assert main(["calibrate", "cut"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("lmsbench calibrate: error: cut:") and err.count("cut") == 1, err
+
+
+def test_calibrate_summary_values_start_in_one_column(tmp_path: Path) -> None:
+    """calibrate's summary is a two-column table, each measurement's value at column 24 (`noise growth
+    2.98 ...`); `residual tail` had one space more than its label needed, its value at column 25."""
+    from experiments.calibrate import format_calibration
+
+    write_carmen(tmp_path / "log.clf", simulate_records("office", seed=0, duration=2.0, sensor=SensorConfig(), rate_hz=4.0))
+    lines = format_calibration(calibrate_log(tmp_path / "log.clf", max_scans=6, fit_duration=1.0))[1:]  # [0]: the log
+    labels = [line[:23].rstrip() for line in lines]
+    assert labels == ["noise sigma at 1-4 m", "noise growth", "noise by range", "nan (invalid) rate",
+                      "+inf (no return) rate", "max-reading rate", "no return on surfaces", "mixed pixels at steps",
+                      "isolated outliers", "residual tail", "tail clustering", "nan clustering"]
+    assert all(line[22] == " " and line[23] != " " for line in lines), [line[:30] for line in lines]
