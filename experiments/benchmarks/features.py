@@ -165,7 +165,7 @@ def run(quick: bool = False) -> list[dict]:
 
 
 def accuracy(world: str, duration: float = 300.0, rate_hz: float = 0.4, sensor=None, **params) -> dict:
-    """Scores of the sensor method on a simulated tour of ``world`` (the README's accuracy table):
+    """Scores of the sensor method on a simulated tour of ``world`` (docs/features.md's accuracy table):
     line precision/recall/F1, rho/alpha errors (RMS and median), errors over the reported std,
     corner precision/recall, false corners, corner position RMS. Needs ``sim``."""
     import warnings
@@ -204,7 +204,7 @@ def accuracy(world: str, duration: float = 300.0, rate_hz: float = 0.4, sensor=N
     }
 
 
-if __name__ == "__main__":  # python -m experiments.benchmarks.features: the README's accuracy table
+if __name__ == "__main__":  # python -m experiments.benchmarks.features: docs/features.md's accuracy table
     import argparse
 
     argparse.ArgumentParser(prog="python -m experiments.benchmarks.features",  # --help ran the whole table
