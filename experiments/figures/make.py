@@ -3,9 +3,9 @@
 Figure names (files ``NAME.png``, ``NAME.pdf`` and the data ``NAME*.csv`` in the output folder):
 
 - ``fig3_scan``: the scan of Figs. 4-6 (Cartesian and in sensor coordinates);
-- ``fig4_ad``, ``fig5_theta``, ``fig6_psi``: AD_i10, theta_i, psi_i of a 361-beam office scan;
+- ``fig4_ad``, ``fig5_theta``, ``fig6_psi``: AD_i10, theta_i, psi_i of a 361-beam scan of the study's world (the office by default);
 - ``fig7_timing``: processing time per scan over the run, every method;
-- ``fig9_office``, ``fig9_intel``: scans with extracted lines (*) and corners (diamonds);
+- ``fig9_office``, ``fig9_intel``: scans with extracted lines (*) and corners (diamonds), ``fig9_office`` of the study's world whatever its name;
 - ``fig10_slam``: SLAM trajectory and map against ground truth;
 - ``accuracy_speed``: line F1 against time per scan, every extractor;
 - ``sweep_NAME_METRIC``: one per sweep folder and metric.
