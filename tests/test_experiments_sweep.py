@@ -493,7 +493,12 @@ def test_the_cli_exits_0_when_every_cell_succeeds_and_1_when_any_fails(tmp_path,
     ok, bad = tmp_path / "ok.yaml", tmp_path / "bad.yaml"
     ok.write_text(yaml.safe_dump(make_spec(log, xs=[0, 1], seeds=[0]).to_dict()))
     assert main(["sweep", str(ok), "--local", "--no-progress", "--out", str(tmp_path / "o1")]) == 0
-    assert "0 failed" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    # the last line names both tables the sweep wrote, as every other command names its files (it named the
+    # Parquet alone, and results.csv beside it went unsaid)
+    assert "0 failed" in out and out.splitlines()[-1] == (
+        f"wrote {tmp_path / 'o1' / 'results.parquet'}, {tmp_path / 'o1' / 'results.csv'}")
+    assert (tmp_path / "o1" / "results.csv").is_file()
     # x = 3 makes the test cell raise
     bad.write_text(yaml.safe_dump(make_spec(log, xs=[0, 3], seeds=[0]).to_dict()))
     assert main(["sweep", str(bad), "--local", "--no-progress", "--out", str(tmp_path / "o2")]) == 1

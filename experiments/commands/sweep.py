@@ -85,7 +85,7 @@ def run(args: argparse.Namespace) -> int:
               f"--retry-failed computes them again)", file=sys.stderr)
     print(f"{spec.name}: {result.total} cells, {result.computed} computed, {result.skipped} already done, "
           f"{result.failed} failed")
-    print(f"wrote {out / 'results.parquet'}")
+    print(f"wrote {out / 'results.parquet'}, {out / 'results.csv'}")  # both tables, as others name every file
     if result.failed:
         errors = result.table.loc[result.table["status"] != "ok", "error"].value_counts()
         for text, n in errors.head(5).items():
