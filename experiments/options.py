@@ -903,16 +903,55 @@ def _small_file(path: Path, limit: int) -> bool:
     return stat.S_ISREG(st.st_mode) and st.st_size <= limit
 
 
+def _yaml_read(path: Path) -> tuple[dict | None, str | None]:
+    """The mapping a YAML file holds and None, or None and what keeps it from being one (one line:
+    unreadable, not UTF-8, empty, not YAML, not a mapping, larger than ``MAX_RECORD_YAML_BYTES``)."""
+    try:
+        st = path.stat()
+    except OSError as exc:
+        return None, f"it cannot be read ({exc.strerror or exc})"
+    if not stat.S_ISREG(st.st_mode):
+        return None, "it is not a regular file"
+    if st.st_size > MAX_RECORD_YAML_BYTES:
+        return None, f"it is larger than a record's {MAX_RECORD_YAML_BYTES} bytes"
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        return None, "it is not UTF-8 text"
+    except OSError as exc:
+        return None, f"it cannot be read ({exc.strerror or exc})"
+    if not text.strip():
+        return None, "it is empty"
+    try:
+        raw = load_yaml(text, words=True)  # an earlier version's record may hold a plain n
+    except Exception as exc:  # noqa: BLE001 - whatever it is, it is not a record of a run
+        return None, f"it does not parse as YAML ({' '.join(str(exc).split())[:160]})"
+    if not isinstance(raw, dict):
+        return None, f"it holds a {_kind_of(raw)}, not a mapping"
+    return raw, None
+
+
+def _kind_of(value: Any) -> str:
+    """A YAML value's kind in a message: list, number, text, ..."""
+    return {list: "list", str: "text", bool: "boolean", int: "number", float: "number",
+            type(None): "null"}.get(type(value), type(value).__name__)
+
+
 def _yaml_mapping(path: Path) -> dict | None:
     """The mapping a YAML file holds, or None (unreadable, not UTF-8, not YAML, not a mapping, larger
     than ``MAX_RECORD_YAML_BYTES``)."""
-    if not _small_file(path, MAX_RECORD_YAML_BYTES):
-        return None
-    try:
-        raw = load_yaml(path.read_text(encoding="utf-8"), words=True)  # an earlier version's record may hold a plain n
-    except Exception:  # noqa: BLE001 - whatever it is, it is not a record of a run
-        return None
-    return raw if isinstance(raw, dict) else None
+    return _yaml_read(path)[0]
+
+
+@dataclass(frozen=True)
+class _Recogniser:
+    """A record's recogniser that can say why a file is not the record (``Owner.problem``): ``why``
+    gives None for a record, else what is wrong with it, one line."""
+
+    why: Callable[[Path], str | None]
+
+    def __call__(self, path: Path) -> bool:
+        return self.why(path) is None
 
 
 def _json_object(path: Path) -> dict | None:
@@ -939,11 +978,19 @@ def _csv_header(path: Path) -> list[str]:
 
 def _yaml_has(*keys: str, dicts: Sequence[str] = (), exact: bool = False) -> Callable[[Path], bool]:
     """A recogniser: a YAML mapping with ``keys`` (``exact``: only those), ``dicts`` of them mappings."""
-    def tells(path: Path) -> bool:
-        raw = _yaml_mapping(path)
-        return (raw is not None and (set(raw) == set(keys) if exact else set(keys) <= set(raw))
-                and all(isinstance(raw[k], dict) for k in dicts))
-    return tells
+    def why(path: Path) -> str | None:
+        raw, problem = _yaml_read(path)
+        if raw is None:
+            return problem
+        missing = [k for k in keys if k not in raw]
+        if missing:
+            return "it has no " + ", ".join(f"{k}:" for k in missing)
+        extra = sorted(str(k) for k in raw if k not in keys) if exact else []
+        if extra:
+            return f"it has {extra[0]}:, which such a record does not hold"
+        flat = [k for k in dicts if not isinstance(raw[k], dict)]
+        return f"its {flat[0]}: holds a {_kind_of(raw[flat[0]])}, not a mapping" if flat else None
+    return _Recogniser(why)
 
 
 def _yaml_says(**values: str) -> Callable[[Path], bool]:
@@ -1051,6 +1098,18 @@ class Owner:
             return set()
         told = self.told(folder)
         return {n for n in writes.present(folder) if n in told or n not in self.records}
+
+    def problem(self, folder: Path) -> tuple[str, str] | None:
+        """The first record of ``folder`` present but not told as this command's, with what is wrong
+        with it (one line), where no record there is told: a hand-damaged sweep.yaml (truncated,
+        wrong types) beside a sweep's cells was refused as any user's folder, naming no record."""
+        if self.told(folder):
+            return None
+        for name, tells in self.records.items():
+            if (folder / name).is_file() and not tells(folder / name):
+                why = tells.why(folder / name) if isinstance(tells, _Recogniser) else None
+                return name, why or f"it is not the {name} such a run writes"
+        return None
 
     def foreign(self, folder: Path, writes: OutTree) -> list[str]:
         """The output files of ``folder`` this run would replace that no earlier run wrote."""
@@ -1199,8 +1258,11 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
                                  "give another folder")
             if theirs:
                 shown = " and ".join(theirs) if len(theirs) <= 3 else ", ".join(theirs[:3]) + f" and {len(theirs) - 3} more"
+                damaged = owner.problem(p) if any(n not in owner.records for n in theirs) else None
+                said = (f" (its record {p / damaged[0]} is not one such a run leaves: {damaged[1]})"
+                        if damaged is not None else "")
                 raise InputError(f"--out {p}: holds {shown}, which this run would replace but no earlier "
-                                 f"{owner.named} run wrote; give a new or empty folder")
+                                 f"{owner.named} run wrote{said}; give a new or empty folder")
         _check_replaceable(p, tree if replaces is None else replaces, removed=patterns)
     parent = _nearest_existing(p)
     if not _writable_folder(parent):

@@ -746,3 +746,30 @@ def test_the_demo_sweeps_files_are_named_by_one_public_function(tmp_path):
     cells = [f"sweeps/{spec.name}/cells/{cell_key(spec.kind, params)}.parquet" for params in spec.cells()]
     assert demo_sweep_files(tmp_path) == cells and len(cells) == 9
     assert list(DEMO_OUTPUTS.folders["sweeps"].folders) == [spec.name]
+
+
+@pytest.mark.parametrize("damage, said", [
+    (b"", "it is empty"),
+    (b"name: t\nkind: extract\nfixed:\n  duration: [0.5", "it does not parse as YAML (line 4, column 17: expected ',' or ']', but got '<stream end>'"),
+    (b"- name\n- kind\n", "it holds a list, not a mapping"),
+    (b"name: t\nfixed: {duration: 0.5}\n", "it has no kind:"),
+    (b"\xff\xfe\x00", "it is not UTF-8 text"),
+], ids=["empty", "truncated", "list", "no-kind", "binary"])
+def test_a_damaged_sweep_yaml_beside_a_sweeps_outputs_is_named_in_the_refusal(sweep_file, tmp_path, capsys, damage, said):
+    """A sweep folder whose sweep.yaml was damaged by hand (cut, emptied, retyped) was refused as any
+    user's folder ("holds cells/..., which this run would replace but no earlier lmsbench sweep run
+    wrote"), naming no record: the message now names the damaged record and what is wrong with it,
+    one line, exit 2, nothing removed."""
+    out = tmp_path / "sw"
+    cells = _finished_sweep(out, yaml.safe_load(sweep_file.read_text()))
+    (out / "sweep.yaml").write_bytes(damage)
+    before = sorted(str(p.relative_to(out)) for p in out.rglob("*"))
+    assert main(["sweep", str(sweep_file), "--inprocess", "--no-progress", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1, err
+    assert err.startswith(f"lmsbench sweep: error: --out {out}: holds {cells[0]} and results.parquet and sweep.yaml, which "
+                          "this run would replace but no earlier lmsbench sweep run wrote (its record "
+                          f"{out / 'sweep.yaml'} is not one such a run leaves: {said}"), err
+    assert err.endswith("); give a new or empty folder\n"), err
+    assert sorted(str(p.relative_to(out)) for p in out.rglob("*")) == before
+    assert (out / "sweep.yaml").read_bytes() == damage
