@@ -80,7 +80,7 @@ from .codes import (
 )
 from . import laser_geometry
 from .errors import InputError, LmsbenchError, LmsbenchWarning, LogFormatError, LogNotFoundError
-from .finite import fixed, is_one_of
+from .finite import fixed, is_one_of, underflow_problem
 from .laser_geometry import LaserGeometry
 from .records import MAX_COORD_M, MAX_HEADING_RAD, Pose2D, Record, SkipLog, pose_problem, stamp_problem  # noqa: F401 - carmen's names too
 from .scan import Scan, snap_angle, valid_ranges
@@ -1172,7 +1172,9 @@ def _word(word: str) -> str:
 def _floats(words: list[str], what: str) -> np.ndarray:
     """Numbers as CARMEN's strtod reads them: Python's float() also takes ``1_000`` (read as 1000 m)
     and turns ``1e400`` into inf, which CARMEN does not: both make the line malformed (a review's
-    reproduction); ``inf`` / ``nan`` written as words keep their meaning (logs converted from ROS)."""
+    reproduction); ``inf`` / ``nan`` written as words keep their meaning (logs converted from ROS).
+    A nonzero number below float64's smallest (``1e-400``, strtod's ERANGE as ``1e400``'s) makes it
+    malformed too: float() reads it as 0.0, which as a range is a logger's "no reading", silently."""
     if "_" in "".join(words):
         bad = next(w for w in words if "_" in w)
         raise ValueError(f"{what}: {bad!r} is not a number (no '_' in a CARMEN number)")
@@ -1186,6 +1188,9 @@ def _floats(words: list[str], what: str) -> np.ndarray:
         for i in np.flatnonzero(infinite):
             if words[i].lstrip("+-").lower() not in INF_WORDS:
                 raise ValueError(f"{what}: {words[i]!r} is beyond float64's range")
+    for i in np.flatnonzero(values == 0.0):  # strtod's ERANGE the other way: '1e-400' read as 0, a range's 'no reading'
+        if underflow_problem(words[i], 0.0) is not None:
+            raise ValueError(f"{what}: {words[i]!r} is below float64's range (nonzero, it would read as 0)")
     return values
 
 
@@ -1199,7 +1204,8 @@ def _few_floats(words: list[str], what: str) -> list[float]:
         values = list(map(float, words))
     except ValueError:
         return _floats(words, what).tolist()  # raises with its message
-    if math.isfinite(sum(values)) and "_" not in "".join(words):
+    if (math.isfinite(sum(values)) and "_" not in "".join(words)
+            and not any(v == 0.0 and underflow_problem(w, v) is not None for w, v in zip(words, values))):
         return values
     return _floats(words, what).tolist()
 
@@ -1235,7 +1241,8 @@ class _RangeWords(dict[str, float]):
         first such word)."""
         self.misses += 1
         value = float(word)
-        if "_" in word or (math.isinf(value) and word.lstrip("+-").lower() not in INF_WORDS):
+        if ("_" in word or (math.isinf(value) and word.lstrip("+-").lower() not in INF_WORDS)
+                or (value == 0.0 and underflow_problem(word, value) is not None)):
             raise ValueError(word)
         if len(word) <= MAX_CACHED_WORD_CHARS:
             if len(self) >= MAX_CACHED_WORDS:

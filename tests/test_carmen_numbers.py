@@ -137,3 +137,24 @@ def test_unique_and_noisy_start_words_are_not_parsed_one_by_one(tmp_path, monkey
         assert sum(per_line) <= most, (name, sum(per_line))  # 791: each code once
         if name == "noisy":  # the code scans after the noisy start are parsed through the cache again
             assert sum(per_line[-100:]) <= 100 and per_line[-1] == 0, per_line[-100:]
+
+
+def test_a_nonzero_number_below_float64_makes_its_line_malformed_as_one_beyond_it_does(tmp_path) -> None:
+    """A range written 1e-400 was read as 0.0 m, a logger's "no reading", silently, where 1e400 made its
+    line malformed: strtod says ERANGE for both. Both are now malformed, in a range (through the pass's
+    word cache, warm or not) or a pose; a zero written as one (0, 0.00, 0e-400, -0) is 0 as before."""
+    path = tmp_path / "tiny.log"
+    path.write_text(_flaser("1.00 2.00", 1.0) + _flaser("1e-400 2.00", 2.0) + _flaser("1.00 2.00", 3.0)
+                    + _flaser("1.00 1e-400", 4.0) + "ODOM 1e-400 0 0 0 0 0 5 h 5\n"
+                    + _flaser("0 0.00 0e-400 -0", 6.0))
+    reader = read_log(path, skip_bad_lines=True)
+    records = list(reader)
+    assert [r.scan.stamp for r in records] == [1.0, 3.0, 6.0]
+    assert records[-1].scan.ranges.tolist() == [0.0, 0.0, 0.0, 0.0]
+    assert reader.stats.skipped == [
+        (2, "FLASER: FLASER ranges: '1e-400' is below float64's range (nonzero, it would read as 0)"),
+        (4, "FLASER: FLASER ranges: '1e-400' is below float64's range (nonzero, it would read as 0)"),
+        (5, "ODOM: ODOM: '1e-400' is below float64's range (nonzero, it would read as 0)")]
+    for parse in (_floats, _few_floats, lambda w, what: _range_floats(w, what, _RangeWords())):
+        with pytest.raises(ValueError, match=r"^r: '-2\.5e-999' is below float64's range"):
+            parse(["1.0", "-2.5e-999"], "r")
