@@ -995,19 +995,32 @@ def _yaml_has(*keys: str, dicts: Sequence[str] = (), exact: bool = False) -> Cal
 
 def _yaml_says(**values: str) -> Callable[[Path], bool]:
     """A recogniser: a YAML mapping whose keys ``values`` hold those values."""
-    def tells(path: Path) -> bool:
-        raw = _yaml_mapping(path)
-        return raw is not None and all(raw.get(k) == v for k, v in values.items())
-    return tells
+    def why(path: Path) -> str | None:
+        raw, problem = _yaml_read(path)
+        if raw is None:
+            return problem
+        for k, v in values.items():
+            if raw.get(k) != v:
+                return f"its {k}: is {repr(raw.get(k))[:80]}, not {v!r}" if k in raw else f"it has no {k}:"
+        return None
+    return _Recogniser(why)
 
 
 def _json_has(**kinds: type) -> Callable[[Path], bool]:
     """A recogniser: a JSON object whose keys ``kinds`` hold values of those types."""
-    def tells(path: Path) -> bool:
+    names = {dict: "an object", list: "a list", str: "text", int: "a whole number"}
+
+    def why(path: Path) -> str | None:
         raw = _json_object(path)
-        return raw is not None and all(isinstance(raw.get(k), t) and not (t is int and isinstance(raw.get(k), bool))
-                                       for k, t in kinds.items())
-    return tells
+        if raw is None:
+            return "it does not read as a JSON object"
+        for k, t in kinds.items():
+            if k not in raw:
+                return f"it has no {k!r}"
+            if not isinstance(raw[k], t) or (t is int and isinstance(raw[k], bool)):
+                return f"its {k!r} is not {names.get(t, t.__name__)}"
+        return None
+    return _Recogniser(why)
 
 
 def _csv_starts(*columns: str) -> Callable[[Path], bool]:

@@ -295,9 +295,11 @@ def test_the_slam_evaluation_replaces_only_an_earlier_runs_outputs(tmp_path: Pat
             slameval.main(["--out", str(out), "--seeds", "0", "--long", "0", "--mit", str(bad)])
         assert stop.value.code == 2
         shown = " and ".join(mine)
+        said = (f" (its record {out / 'slameval.yaml'} is not one such a run leaves: its command: is 'mine', not "
+                "'python -m experiments.slameval')" if "tables.md" in mine else "")
         assert capsys.readouterr().err.startswith(
             f"python -m experiments.slameval: error: --out {out}: holds {shown}, which this run would replace but no "
-            "earlier python -m experiments.slameval run wrote; give a new or empty folder"), mine
+            f"earlier python -m experiments.slameval run wrote{said}; give a new or empty folder"), mine
         assert {p.name: p.read_text() for p in out.iterdir()} == mine
     # a folder written before slameval.yaml, told by its sim.parquet's columns, was refused as no earlier run's:
     # it passes the folder's check (and the log given, no log, is refused after it)

@@ -588,7 +588,9 @@ def test_ctrl_c_after_slams_trajectory_keeps_the_users_own_metrics_and_figure(si
     assert sorted(p.name for p in out.iterdir()) == ["metrics.json", "slam.png"]
     assert status == 2, err
     assert err.splitlines() == [f"lmsbench slam: error: --out {out}: holds metrics.json and slam.png, which this run "
-                                "would replace but no earlier lmsbench slam run wrote; give a new or empty folder"]
+                                "would replace but no earlier lmsbench slam run wrote (its record "
+                                f"{out / 'metrics.json'} is not one such a run leaves: it does not read as a JSON "
+                                "object); give a new or empty folder"]
 
 
 @pytest.mark.slow
