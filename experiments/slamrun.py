@@ -547,8 +547,9 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     if not len(records):
         raise LmsbenchError(f"{log}: no laser scans found")
     if n_read > 1 and not timed:  # it ran: every step predicted no motion and searched no turn
-        raise LmsbenchError(f"{log}: all {n_read} scans read have the same stamp ({fixed(first_stamp)} s); SLAM's "
-                            "motion model needs the time between scans (a log written without a clock?)")
+        from slam.run import same_stamp_problem
+
+        raise LmsbenchError(f"{log}: {same_stamp_problem(n_read, first_stamp)}")
     if len(records) == 1 and n_read > 1 and (rate_hz is not None or every > 1):  # it ran: a "SLAM" of one scan
         flag = f"--rate-hz {rate_hz:g}" if rate_hz is not None else f"--every {every}"
         raise LmsbenchError(f"{log}: {flag} keeps 1 of the {n_read} scans read (stamps {fixed(first_stamp)} to "

@@ -546,6 +546,37 @@ def test_run_slam_config_of_the_wrong_type(config: object) -> None:
         run_slam([Record(scan=Scan.lms200(np.full(361, 3.0)))], config)  # type: ignore[arg-type]
 
 
+@pytest.mark.parametrize("preset", ["default", "paper"])
+@pytest.mark.parametrize("source", ["list", "tuple", "generator"])
+def test_run_slam_refuses_records_all_of_one_stamp_as_lmsbench_slam_does(source: str, preset: str, monkeypatch) -> None:
+    """run_slam took 10 scans all stamped 3 s and returned a trajectory (the default preset turned and
+    moved the robot in zero time, the paper preset predicted no motion), where `lmsbench slam` refuses
+    such a log; now the same check and message (slam.run.same_stamp_problem), a list or tuple before
+    any work (nothing matched, nothing extracted), a generator at its end. Two stamps, or one scan, still run."""
+    import slam.run
+    import slam.scanslam
+    from slam import SlamConfig, run_slam
+    from slam.run import SlamInputError
+
+    scans = [Record(scan=Scan.lms200(np.full(361, 3.0 + 0.01 * k), stamp=3.0)) for k in range(10)]
+    made = {"list": list, "tuple": tuple, "generator": lambda s: (r for r in s)}[source]
+    worked: list[int] = []
+    if source != "generator":
+        monkeypatch.setattr(slam.scanslam, "run_scan_slam", lambda *a, **k: worked.append(1))
+        monkeypatch.setattr(slam.run, "_observed", lambda *a, **k: worked.append(1) or iter(()))
+    message = ("records: all 10 scans read have the same stamp (3.000000 s); SLAM's motion model needs the time "
+               "between scans (a log written without a clock?)")
+    with pytest.raises(SlamInputError, match=f"^{re.escape(message)}$"):
+        run_slam(made(scans), SlamConfig(preset=preset))
+    assert worked == []
+    with pytest.raises(SlamInputError, match=r"^records: all 4 scans read have the same stamp \(3\.000000 s\)"):
+        run_slam(made(scans), SlamConfig(preset=preset), max_scans=4)
+    monkeypatch.undo()
+    assert len(run_slam(made(scans[:1]), SlamConfig(preset=preset)).trajectory) == 1
+    timed = [*scans[:-1], Record(scan=scans[-1].scan.replace(stamp=3.5))]
+    assert len(run_slam(made(timed), SlamConfig(preset=preset)).trajectory) == 10
+
+
 # -- Record -------------------------------------------------------------------------------------------
 @pytest.mark.parametrize("kw, message", [
     (dict(scan=5), "^scan: must be an lms200.Scan"),                       # write_log: AttributeError
