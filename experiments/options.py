@@ -1277,7 +1277,7 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
                 raise InputError(f"--out {p}: holds {shown}, which this run would replace but no earlier "
                                  f"{owner.named} run wrote{said}; give a new or empty folder")
         _check_replaceable(p, tree if replaces is None else replaces, removed=patterns)
-    parent = _nearest_existing(p)
+    parent = nearest_existing(p)
     if not _writable_folder(parent):
         raise InputError(f"--out {p}: {parent} is not a writable folder")
     hold_output(p, make=True)  # a new folder is made here to be locked (removed as the command ends if still empty)
@@ -1510,15 +1510,18 @@ def _check_default_base(base: Path) -> None:
     check_link(base)
     if base.exists() and not base.is_dir():
         raise InputError(f"{base} (where a run without --out goes) exists and is not a folder; give --out")
-    parent = _nearest_existing(base)
+    parent = nearest_existing(base)
     if not _writable_folder(parent):
         what = "a writable folder" if parent.is_dir() else "a folder"
         raise InputError(f"{parent} is not {what}, so a run without --out cannot be made in {base}; give --out")
 
 
-def _nearest_existing(p: Path) -> Path:
-    """``p`` or its nearest parent that exists (where a folder to be made goes)."""
-    while not p.exists():
+def nearest_existing(p: Path, links: bool = False) -> Path:
+    """``p`` or its nearest parent that exists (where a folder to be made goes), the root at most.
+    ``links``: a dangling symbolic link counts as existing and is where it stops (the sweep's folders,
+    ``sweep.store``, say such a link is no folder to make one in); without, it is walked past to the
+    folder that holds it (``check_out`` then checks that folder)."""
+    while not (p.exists() or (links and p.is_symlink())) and p != p.parent:
         p = p.parent
     return p
 

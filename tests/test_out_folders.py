@@ -773,3 +773,24 @@ def test_a_damaged_sweep_yaml_beside_a_sweeps_outputs_is_named_in_the_refusal(sw
     assert err.endswith("); give a new or empty folder\n"), err
     assert sorted(str(p.relative_to(out)) for p in out.rglob("*")) == before
     assert (out / "sweep.yaml").read_bytes() == damage
+
+
+def test_one_walk_to_the_nearest_existing_folder_for_check_out_and_the_sweeps_store(tmp_path):
+    """sweep.store._check_made_in repeated options._nearest_existing, but for a dangling link, where it
+    stops (the store says the link is no folder) and check_out's walk goes past it to the folder holding
+    it: one helper, options.nearest_existing, with both behaviours, and the messages as they were."""
+    from lms200 import LmsbenchError
+    from experiments.options import nearest_existing
+    from experiments.sweep.store import _check_made_in
+
+    (tmp_path / "dangling").symlink_to(tmp_path / "nowhere")
+    deep = tmp_path / "dangling" / "a" / "b"
+    assert nearest_existing(deep) == tmp_path
+    assert nearest_existing(deep, links=True) == tmp_path / "dangling"
+    assert nearest_existing(tmp_path / "new" / "x") == nearest_existing(tmp_path / "new" / "x", links=True) == tmp_path
+    assert nearest_existing(Path("/")) == Path("/")
+    with pytest.raises(LmsbenchError) as err:
+        _check_made_in(deep, "the cells", "and cells are left")
+    assert str(err.value) == (f"{deep}: the cells cannot be made: {tmp_path / 'dangling'} is not a folder (a file, or "
+                              "a link to none), and cells are left; give a folder that can be written")
+    _check_made_in(tmp_path / "new" / "x", "the cells", "and cells are left")  # a writable folder above: passes
