@@ -462,14 +462,15 @@ def _head(path: Path, n: int = 4096, what: str = "an input") -> bytes:
 MAX_ODD_BYTES = 0.05  # share of a log's first 4 KB that may be control bytes or >= 0x80 (a latin-1 comment)
 
 
-def _text_head(path: Path, what: str, utf8: bool = True) -> None:
+def _text_head(path: Path, what: str, utf8: bool = True, head: bytes | None = None) -> None:
     """Raise InputError unless the file starts with text (not binary, not a mislabelled or broken
     compressed file, not an archive), read through gzip / bzip2 / xz where compressed. ``utf8``:
     the text must be UTF-8 (YAML, read as UTF-8); else (a log, read as ASCII with other bytes
     replaced) a byte that is not UTF-8 is text too, unless control bytes or bytes >= 0x80 make up
     more than MAX_ODD_BYTES of the head (a latin-1 comment in a log's first 4 KB refused a log
-    that the same comment further down did not)."""
-    head = _head(path, what=what)
+    that the same comment further down did not). ``head``: the file's first 4 KB where the caller
+    read them already (``check_log``), else read here."""
+    head = _head(path, what=what) if head is None else head
     kind = compression(head)
     named = COMPRESSION_SUFFIXES.get(path.suffix)
     if named and kind != named:
@@ -720,7 +721,7 @@ def check_log(path: str | os.PathLike) -> Path:
         return p
     if not head:
         raise InputError(f"{p}: empty file, not {what}")
-    _text_head(p, what, utf8=False)  # the reader reads ASCII, other bytes replaced
+    _text_head(p, what, utf8=False, head=head)  # the reader reads ASCII, other bytes replaced
     return p
 
 
