@@ -126,13 +126,20 @@ class LogScans:
 
     def __init__(self, open_log: Callable[[], Iterable[Record]], where: str, rows: ScanRows | None = None) -> None:
         rows = rows if rows is not None else ScanRows()
+        self._hold(open_log, where, rows.numbers.taken(), rows.stamps.taken(), rows.crcs.taken(), rows.shapes.taken(),
+                   list(rows.geometries), rows.odom.taken(), rows.truth.taken(), rows.corrected.taken())
+
+    def _hold(self, open_log: Callable[[], Iterable[Record]], where: str, numbers: np.ndarray, stamps: np.ndarray,
+              crcs: np.ndarray, shapes: np.ndarray, geometries: list[tuple[int, float, float]],
+              odom: np.ndarray | None, truth: np.ndarray | None, corrected: np.ndarray | None) -> None:
+        """Set the rows held (``__init__`` from a ScanRows, :meth:`taken` from another LogScans' arrays)."""
         self.open_log, self.where = open_log, where  # a new reader for each pass: two passes at once share nothing
-        self.numbers: np.ndarray = rows.numbers.taken()  # the log's own scan number of each (from 0)
-        self.stamps: np.ndarray = rows.stamps.taken()  # s
-        self.crcs: np.ndarray = rows.crcs.taken()
-        self.shapes: np.ndarray = rows.shapes.taken()  # rows of ``geometries``
-        self.geometries: list[tuple[int, float, float]] = list(rows.geometries)  # (beams, angle_increment, range_max)
-        self.odom, self.truth, self.corrected = rows.odom.taken(), rows.truth.taken(), rows.corrected.taken()
+        self.numbers: np.ndarray = numbers  # the log's own scan number of each (from 0)
+        self.stamps: np.ndarray = stamps  # s
+        self.crcs: np.ndarray = crcs
+        self.shapes: np.ndarray = shapes  # rows of ``geometries``
+        self.geometries: list[tuple[int, float, float]] = geometries  # (beams, angle_increment, range_max)
+        self.odom, self.truth, self.corrected = odom, truth, corrected  # (n, 3) or None
         # id(scan) -> (a weak reference to it, its index) of the scans the last pass gave that live, the last
         # RECENT_SCANS at most: no scan is kept alive, and a new object at a freed scan's address is none of them
         self._recent: dict[int, tuple[weakref.ref, int]] = {}
@@ -146,10 +153,9 @@ class LogScans:
         keep = np.asarray(keep, dtype=np.int64)
         if keep.size > 1 and not (np.diff(keep) > 0).all():  # a pass reads the log once, in order
             raise ValueError("LogScans.taken: the indices must rise (a pass reads the log in its order)")
-        out = LogScans(self.open_log, self.where)
-        out.numbers, out.stamps, out.crcs, out.shapes = (a[keep] for a in (self.numbers, self.stamps, self.crcs, self.shapes))
-        out.geometries = self.geometries
-        out.odom, out.truth, out.corrected = (None if a is None else a[keep] for a in (self.odom, self.truth, self.corrected))
+        out = LogScans.__new__(LogScans)  # built from these arrays (an empty ScanRows was made, then written over)
+        out._hold(self.open_log, self.where, self.numbers[keep], self.stamps[keep], self.crcs[keep], self.shapes[keep],
+                  self.geometries, *(None if a is None else a[keep] for a in (self.odom, self.truth, self.corrected)))
         return out
 
     def __iter__(self) -> Iterator[Record]:
