@@ -484,6 +484,29 @@ def test_gym_step_before_reset_is_refused() -> None:
     assert env.step(np.array([0.1, 0.0]))[4]["progress_m"] >= 0
 
 
+def test_gym_step_or_reset_after_close_is_refused_and_close_twice_is_fine() -> None:
+    """Probe 14: step or reset after close() was PyBullet's TypeError ("'NoneType' object cannot be
+    interpreted as an integer"), naming nothing, through gymnasium.make's env too; so was a scan of a
+    closed LMS200Sim. Now an InputError saying the environment (or simulator) is closed."""
+    import gymnasium
+
+    from sim.gym_env import OfficeEnv
+
+    closed = "the environment is closed (close() was called); make a new one (gymnasium.make or sim.gym_env.OfficeEnv)"
+    for env in (OfficeEnv(), gymnasium.make("lmsbench/Office-v0")):
+        env.reset(seed=0)
+        env.close()
+        env.close()  # twice: fine
+        with pytest.raises(InputError, match=f"^step: {re.escape(closed)}$"):
+            env.step(np.array([0.1, 0.0], dtype=np.float32))
+        with pytest.raises(InputError, match=f"^reset: {re.escape(closed)}$"):
+            env.reset(seed=1)
+    env = OfficeEnv()
+    env.sim.close()
+    with pytest.raises(InputError, match=r"^LMS200Sim: closed \(close\(\) was called\), so it casts no ray; make a new one$"):
+        env.sim.scan_at((0.0, 0.0, 0.0))
+
+
 @pytest.mark.parametrize("seed", [-1, 1.5, "a"])
 def test_gym_reset_seed_must_be_a_whole_number(seed: object) -> None:
     """reset(seed=-1) raised Gymnasium's own error, not an LmsbenchError."""
