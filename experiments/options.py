@@ -1057,14 +1057,26 @@ def _first_line(start: str) -> Callable[[Path], bool]:
 SLAM_RECORD_KEYS = ("extractor_config", "versions")
 
 
-def _slam_config(path: Path) -> bool:
-    """config.yaml as lmsbench slam writes it (slamrun.write_config): input: and slam: mappings,
-    the slam one with a preset, and nothing else but the records extractor_config: and versions:
-    (mappings; an earlier version wrote neither)."""
-    raw = _yaml_mapping(path)
-    return (raw is not None and {"input", "slam"} <= set(raw) <= {"input", "slam", *SLAM_RECORD_KEYS}
-            and isinstance(raw["input"], dict) and isinstance(raw["slam"], dict) and "preset" in raw["slam"]
-            and all(isinstance(raw[k], dict) for k in SLAM_RECORD_KEYS if k in raw))
+def _slam_config_problem(path: Path) -> str | None:
+    """What keeps ``path`` from being config.yaml as lmsbench slam writes it (slamrun.write_config): input:
+    and slam: mappings, the slam one with a preset, and nothing else but the records extractor_config: and
+    versions: (mappings; an earlier version wrote neither); None when it is one."""
+    raw, problem = _yaml_read(path)
+    if raw is None:
+        return problem
+    missing = [k for k in ("input", "slam") if k not in raw]
+    if missing:
+        return "it has no " + ", ".join(f"{k}:" for k in missing)
+    extra = sorted(str(k) for k in raw if k not in ("input", "slam", *SLAM_RECORD_KEYS))
+    if extra:
+        return f"it has {extra[0]}:, which such a record does not hold"
+    flat = [k for k in ("input", "slam", *SLAM_RECORD_KEYS) if k in raw and not isinstance(raw[k], dict)]
+    if flat:
+        return f"its {flat[0]}: holds a {_kind_of(raw[flat[0]])}, not a mapping"
+    return None if "preset" in raw["slam"] else "its slam: has no preset:"
+
+
+_slam_config = _Recogniser(_slam_config_problem)
 
 
 @dataclass(frozen=True)

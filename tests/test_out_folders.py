@@ -794,3 +794,20 @@ def test_one_walk_to_the_nearest_existing_folder_for_check_out_and_the_sweeps_st
     assert str(err.value) == (f"{deep}: the cells cannot be made: {tmp_path / 'dangling'} is not a folder (a file, or "
                               "a link to none), and cells are left; give a folder that can be written")
     _check_made_in(tmp_path / "new" / "x", "the cells", "and cells are left")  # a writable folder above: passes
+
+
+def test_a_damaged_slam_config_beside_a_slams_outputs_is_named_in_the_refusal(sim, tmp_path, capsys):
+    """The same for slam: its config.yaml retyped by hand beside its trajectory.tum is named, with what is wrong."""
+    out = tmp_path / "slam"
+    out.mkdir()
+    (out / "trajectory.tum").write_text("0.0 0 0 0 0 0 0 1\n")
+    for text, said in (("input: {}\nslam: {}\n", "its slam: has no preset:"),
+                       ("input: {}\nslam: {preset: default}\nnotes: mine\n", "it has notes:, which such a record does not hold"),
+                       ("input: [1]\nslam: {preset: default}\n", "its input: holds a list, not a mapping")):
+        (out / "config.yaml").write_text(text)
+        assert main(["slam", str(sim), "--quiet", "--out", str(out)]) == 2
+        assert capsys.readouterr().err == (
+            f"lmsbench slam: error: --out {out}: holds config.yaml and trajectory.tum, which this run would replace but "
+            f"no earlier lmsbench slam run wrote (its record {out / 'config.yaml'} is not one such a run leaves: {said}); "
+            "give a new or empty folder\n")
+        assert (out / "config.yaml").read_text() == text
