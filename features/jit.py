@@ -6,6 +6,7 @@ inf or nan, as in numpy, never an exception). Compiled code runs without Python'
 from __future__ import annotations
 
 from lms200.angles import wrap_scalar
+from lms200.errors import in_chain
 from lms200.numba_required import numba
 
 kernel = numba.njit(cache=True, error_model="numpy", nogil=True)
@@ -33,11 +34,23 @@ class FixedTypeCall:
         self.entry = None
 
     def __call__(self, *args: object) -> object:
-        if self.entry is not None:
-            return self.entry(*args)
-        out = self.dispatcher(*args)
+        try:
+            if self.entry is not None:
+                return self.entry(*args)
+            out = self.dispatcher(*args)
+        except SystemError as exc:
+            raise interrupted(exc) from None
         types = tuple(self.dispatcher.typeof_pyval(a) for a in args)
         compiled = self.dispatcher.overloads.get(types)
         if compiled is not None:
             self.entry = compiled.entry_point
         return out
+
+
+def interrupted(exc: SystemError) -> BaseException:
+    """What a compiled call's SystemError stands for: Ctrl-C landing while the kernel ran Python code
+    of numba's (``_numba_unpickle``) came out as "SystemError: <built-in method extract_batch ...> returned
+    a result with an exception set", five chained tracebacks over the KeyboardInterrupt (more than half
+    of the Ctrl-Cs during ``extract_many``): that KeyboardInterrupt itself; any other SystemError as it is."""
+    cause = in_chain(exc, KeyboardInterrupt)
+    return cause if cause is not None else exc

@@ -2343,3 +2343,27 @@ def test_an_empty_path_is_refused_as_empty_not_read_as_the_current_folder(call) 
     pathlib reads "" as the current folder (probe 13)."""
     with pytest.raises(InputError, match=r"^path: empty \('\s*'\); give a file or folder name$"):
         call()
+
+
+def test_ctrl_c_inside_a_compiled_extraction_is_a_keyboard_interrupt() -> None:
+    """Probe 14: Ctrl-C during extract_many (Jupyter's interrupt too) came out, more than half the time, as
+    "SystemError: <built-in method extract_batch ...> returned a result with an exception set" over five
+    chained tracebacks: Python's handler raised the KeyboardInterrupt inside numba's _numba_unpickle, which
+    the compiled call runs to box its results. features.jit.FixedTypeCall raises that KeyboardInterrupt
+    itself; any other SystemError is as it was."""
+    from features.jit import FixedTypeCall
+
+    def interrupted_entry(*args: object) -> object:
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:
+            raise SystemError("<function _numba_unpickle> returned a result with an exception set") from exc
+
+    call = FixedTypeCall(None)  # type: ignore[arg-type]
+    call.entry = interrupted_entry
+    with pytest.raises(KeyboardInterrupt) as info:
+        call(1.0)
+    assert info.value.__suppress_context__
+    call.entry = lambda *args: (_ for _ in ()).throw(SystemError("another"))
+    with pytest.raises(SystemError, match="^another$"):
+        call(1.0)
