@@ -20,12 +20,26 @@ wrap_one = kernel(wrap_scalar)
 
 
 
+#: a stop signal's handler (``experiments.cli``) that landed in numba's own Python code inside a
+#: compiled call sets this: the next FixedTypeCall to return raises the KeyboardInterrupt, outside
+#: the compiled code (one global read per call), and clears it (``raise_pending_stop``)
+stop_pending = False
+
+
+def raise_pending_stop() -> None:
+    """Raise the stop a signal handler left pending (``stop_pending``), once: the flag is cleared first."""
+    global stop_pending
+    stop_pending = False
+    raise KeyboardInterrupt
+
+
 class FixedTypeCall:
     """A compiled kernel called at one call site whose argument types never change (the
     extractors' ``extract_scan``: a Scan's read-only float64 ranges, Python floats, the records).
     The first call goes through numba's dispatcher and keeps the compiled entry point of those
     types; later calls go to it directly, skipping the per-call type dispatch (~3 us, a tenth of
-    a fast extraction). The caller guarantees the types (floats as ``float``, arrays as built)."""
+    a fast extraction). The caller guarantees the types (floats as ``float``, arrays as built).
+    A stop left pending while the call ran (``stop_pending``) is raised as it returns."""
 
     __slots__ = ("dispatcher", "entry")
 
@@ -35,11 +49,16 @@ class FixedTypeCall:
 
     def __call__(self, *args: object) -> object:
         try:
-            if self.entry is not None:
-                return self.entry(*args)
-            out = self.dispatcher(*args)
+            out = self.entry(*args) if self.entry is not None else self._first(*args)
         except SystemError as exc:
             raise interrupted(exc) from None
+        if stop_pending:
+            raise_pending_stop()
+        return out
+
+    def _first(self, *args: object) -> object:
+        """The call through the dispatcher, which keeps the compiled entry point of these types."""
+        out = self.dispatcher(*args)
         types = tuple(self.dispatcher.typeof_pyval(a) for a in args)
         compiled = self.dispatcher.overloads.get(types)
         if compiled is not None:
