@@ -51,7 +51,10 @@ class FixedTypeCall:
         try:
             out = self.entry(*args) if self.entry is not None else self._first(*args)
         except SystemError as exc:
-            raise interrupted(exc) from None
+            ki = interrupted(exc)
+            if ki is exc:  # a genuine SystemError: as it was, its cause and context kept
+                raise
+            raise ki from None
         if stop_pending:
             raise_pending_stop()
         return out

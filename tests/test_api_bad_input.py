@@ -2367,3 +2367,32 @@ def test_ctrl_c_inside_a_compiled_extraction_is_a_keyboard_interrupt() -> None:
     call.entry = lambda *args: (_ for _ in ()).throw(SystemError("another"))
     with pytest.raises(SystemError, match="^another$"):
         call(1.0)
+
+
+def test_a_genuine_system_error_of_a_compiled_call_keeps_its_cause_and_context() -> None:
+    """A review: FixedTypeCall raised every SystemError ``from None``, a genuine one too (not over a
+    KeyboardInterrupt), stripping the cause and context that say where it came from."""
+    from features.jit import FixedTypeCall
+
+    def failing_entry(*args: object) -> object:
+        try:
+            raise ValueError("the reason")
+        except ValueError as exc:
+            raise SystemError("<built-in method extract_batch> returned NULL without setting an exception") from exc
+
+    def failing_while_handling(*args: object) -> object:
+        try:
+            raise ValueError("the context")
+        except ValueError:
+            raise SystemError("error return without exception set")  # noqa: B904 - the implicit context
+
+    call = FixedTypeCall(None)  # type: ignore[arg-type]
+    call.entry = failing_entry
+    with pytest.raises(SystemError, match="returned NULL") as info:
+        call(1.0)
+    assert isinstance(info.value.__cause__, ValueError) and str(info.value.__cause__) == "the reason"
+    call.entry = failing_while_handling
+    with pytest.raises(SystemError, match="^error return without exception set$") as info:
+        call(1.0)
+    assert info.value.__cause__ is None and not info.value.__suppress_context__
+    assert isinstance(info.value.__context__, ValueError) and str(info.value.__context__) == "the context"
