@@ -431,7 +431,7 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         FileNotFoundError: the input does not exist.
         LmsbenchError: a folder without scans.clf, a simulate folder whose run did not finish
             (options.check_simulate_finished), an input without scans, or none with a valid beam, or
-            more than one scan read and all of one stamp (no time between scans for the motion model), or
+            more than one scan read, or kept, and all of one stamp (no time between scans for the motion model), or
             one scan to run on (an input of one scan, ``max_scans`` below 2, ``rate_hz`` / ``every`` that
             keep one scan of several), or ``every`` other than 1 beside ``rate_hz`` (give one).
     """
@@ -514,8 +514,9 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
 
     rows = ScanRows()  # one compact row a scan kept: the scans are read again at each pass (LogScans)
     reader = read_log(log, **(read_options or {}))
-    first_stamp, last_stamp, n_read, timed = None, None, 0, False  # timed: some scan read has another stamp than the first
+    first_stamp, last_stamp, n_read, timed, rows_first_stamp = None, None, 0, False, 0.0  # timed: some scan read has another stamp than the first
     kept_stamp = None  # the stamp of the last scan kept
+    kept_timed = False  # some scan kept has another stamp than the first kept
     from lms200.units import UnitsTally
 
     tally, valid = UnitsTally(), False  # the scans kept: their units (all of them), a valid beam in some
@@ -535,6 +536,10 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
             check_beams(rec.scan, f"{log}: scan {k}")
             if config is not None and not len(rows):
                 check_first_scan(rec.scan, config, f"{log}: scan {k}")
+            if len(rows):
+                kept_timed = kept_timed or rec.scan.stamp != rows_first_stamp
+            else:
+                rows_first_stamp = rec.scan.stamp
             rows.append(k, rec)
             kept_stamp = rec.scan.stamp
             if not valid:
@@ -560,6 +565,11 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         flag = f"--rate-hz {rate_hz:g}" if rate_hz is not None else f"--every {every}"
         raise LmsbenchError(f"{log}: {flag} keeps 1 of the {n_read} scans read (stamps {fixed(first_stamp)} to "
                             f"{fixed(last_stamp)} s); SLAM needs two or more")
+    if len(records) > 1 and not kept_timed:  # the scans read had stamps, those kept one: it ran, then run_slam refused
+        flags = " and ".join(([f"--every {every}"] if every > 1 else [])  # it as "all 5 scans read have the same
+                             + ([f"--max-scans {max_scans}"] if max_scans is not None else []))  # stamp", of 10 read
+        raise LmsbenchError(f"{log}: {flags or 'the selection'} keeps {len(records)} of the {n_read} scans read, all "
+                            f"stamped {fixed(rows_first_stamp)} s; SLAM's motion model needs the time between scans")
     if len(records) == 1:  # it ran and reported a healthy run of no step (matched fraction 1 of 0 steps)
         raise LmsbenchError(f"{log}: holds one scan (stamp {fixed(first_stamp)} s); SLAM needs two or more")
     if not valid:
