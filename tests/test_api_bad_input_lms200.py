@@ -396,3 +396,18 @@ def test_a_masked_scalar_field_of_a_scan_is_refused_as_masked_without_numpys_war
                 Scan(np.full(361, 2.0), **{**kw, field: masked})
         scan = Scan(np.full(361, 2.0), **{**kw, field: np.ma.masked_array(kw[field])})
     assert getattr(scan, field) == kw[field]
+
+
+def test_a_masked_array_of_several_values_as_a_scalar_field_is_named_so() -> None:
+    """A review: Scan(angle_min=np.ma.array([1., 2.], mask=[True, False])) said "got a masked value (it
+    has none)": it is a masked array of 2 values, which has a value (numpy's repr was several lines)."""
+    from lms200 import Scan
+    from lms200.errors import ScanError
+
+    kw: dict = dict(angle_increment=np.pi / 360, range_min=0.0, range_max=8.183)
+    for value, n in ((np.ma.array([1.0, 2.0], mask=[True, False]), 2), (np.ma.array([1.0, 2.0, 3.0]), 3),
+                     (np.ma.array([], dtype=float), 0)):
+        with pytest.raises(ScanError, match=rf"^angle_min: must be a number, got a masked array of {n} values$"):
+            Scan(np.full(361, 2.0), angle_min=value, **kw)
+    with pytest.raises(ScanError, match=r"^angle_min: must be a number, got a masked value \(it has none\)$"):
+        Scan(np.full(361, 2.0), angle_min=np.ma.array([1.0], mask=[True]), **kw)
