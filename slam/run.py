@@ -513,12 +513,11 @@ def _check_one_stamp_given(records: object, max_scans: int | None) -> None:
         return  # an item that is no Record is checked_records' error, naming its index
     try:
         first = float(taken[0].scan.stamp)
-        if all(float(r.scan.stamp) == first for r in taken):
-            raise SlamInputError(f"records: {same_stamp_problem(len(taken), first)}")
-    except (TypeError, ValueError, AttributeError) as exc:
-        if isinstance(exc, SlamInputError):
-            raise
+        one_stamp = all(float(r.scan.stamp) == first for r in taken)
+    except (TypeError, ValueError, AttributeError):
         return  # a stamp that is no number is checked_records' error
+    if one_stamp:
+        raise SlamInputError(f"records: {same_stamp_problem(len(taken), first)}")
 
 
 def check_first_scan(scan: Any, config: SlamConfig, where: str = "records[0]") -> None:
