@@ -148,6 +148,7 @@ class _Version(argparse.Action):
 
 
 REDELIVER_S = 0.05  # s after a swallowed stop (see _Interrupt.swallowed) before it is raised again
+REDELIVER_MAX = 10  # tries of REDELIVER_S (0.5 s) to raise a stop outside numba's code; then it is raised anyway
 INTERRUPT_GRACE_S = 15.0  # s after Ctrl-C for cleanup; then child processes are killed and the process exits 130
 
 #: the command was stopped by a signal (its line written): the stop signals are ignored at the exit's end
@@ -186,6 +187,11 @@ class _Interrupt:
         self.timer: threading.Timer | None = None
         self.signum: int = signal.SIGINT
         self.redeliver = False  # the stop's KeyboardInterrupt was swallowed: raise it again
+        self.retry_due = False  # the next signal is _raise_again's own (interrupt_main), not a user's
+        self.retries = 0  # of the stop held back (see handler)
+        self.in_jit = False  # the stop is pending in features.jit (see handler)
+        self.in_numba = False  # the stop was held back in numba's code (else in sys.unraisablehook: swallowed)
+        self.retry_timer: threading.Timer | None = None  # _raise_again's
         self.in_hook = False  # sys.unraisablehook is running
         self.running = False  # the command is running (a swallowed stop is raised again only then)
 
@@ -194,15 +200,22 @@ class _Interrupt:
         return STOP_SIGNALS.get(signal.Signals(self.signum), STOP_SIGNALS[signal.SIGINT])
 
     def handler(self, signum: int, frame: Any) -> None:
-        if self.redeliver:  # the first stop again (see swallowed), not a second Ctrl-C
+        retry, self.retry_due = self.retry_due, False
+        if retry and not self.redeliver:  # _raise_again's own, for a stop raised meanwhile (features.jit)
+            return
+        if retry:  # the first stop again (see swallowed, _raise_again), not a second Ctrl-C
             if not self.running:  # the command returned meanwhile: nothing to stop (raised during the
-                self.redeliver = False  # exit, it cut an atexit callback short, silently: a review)
+                self._drop_held_stop()  # exit, it cut an atexit callback short, silently: a review)
                 return
-            if self.in_hook:  # not inside the hook itself, where it would be swallowed again
-                self._raise_again()
+            if self.in_jit and not _jit_stop_pending():  # features.jit raised it as its compiled call returned
+                self._drop_held_stop()
                 return
-            self.redeliver = False
-            raise KeyboardInterrupt
+            self.retries += 1
+            if (self.in_hook or _in_numba(frame)) and self.retries < REDELIVER_MAX:
+                self._raise_again()  # not inside the hook itself, where it would be swallowed again, nor
+                return  # inside a compiled call (see _in_numba); after REDELIVER_MAX tries, raised anyway
+            self._drop_held_stop()  # (back-to-back compiled calls: each try landed in one, and the command
+            raise KeyboardInterrupt  # went on until the grace timer killed it, or ended 0, the stop lost)
         if self.ended:  # the command is over: the signal meets the interpreter's exit, nothing to stop
             self.after_the_end(signum)
             return
@@ -212,7 +225,19 @@ class _Interrupt:
         self.timer = threading.Timer(INTERRUPT_GRACE_S, self.hard_stop)
         self.timer.daemon = True
         self.timer.start()
+        if _in_numba(frame):  # raised there, it broke the compiled call (a SystemError, or the process crashed)
+            self.redeliver, self.retries, self.in_numba = True, 0, True
+            self.in_jit = _set_jit_stop(True)  # raised as an extractor's compiled call returns (features.jit)
+            self._raise_again()  # else (another compiled call) tried again REDELIVER_S later
+            return
         raise KeyboardInterrupt
+
+    def _drop_held_stop(self) -> None:
+        """The stop held back (see handler) is raised, or not to be: no retry, nothing pending in features.jit."""
+        self.redeliver = self.in_jit = False
+        _set_jit_stop(False)
+        if self.retry_timer is not None:  # a retry left for it would stop the next command in this process
+            self.retry_timer.cancel()
 
     def swallowed(self, unraisable: Any) -> bool:
         """Whether ``unraisable`` (what ``sys.unraisablehook`` is given) is this stop's
@@ -222,7 +247,7 @@ class _Interrupt:
         line, and the command went on until a second Ctrl-C or the grace timer stopped it."""
         if not isinstance(unraisable.exc_value, KeyboardInterrupt) or self.timer is None or not self.running:
             return False
-        self.in_hook, self.redeliver = True, True
+        self.in_hook, self.redeliver, self.retries, self.in_numba = True, True, 0, False
         try:
             self._raise_again()
         finally:
@@ -233,9 +258,16 @@ class _Interrupt:
         """The handler run again in the main thread REDELIVER_S from now, from another thread: by
         then the hook and the collection have returned (a signal tripped at once is handled inside
         the hook itself, where its exception is swallowed too)."""
-        timer = threading.Timer(REDELIVER_S, _thread.interrupt_main, (self.signum,))
+        timer = self.retry_timer = threading.Timer(REDELIVER_S, self._retry)
         timer.daemon = True
         timer.start()
+
+    def _retry(self) -> None:
+        """The timer's signal to the main thread: marked as its own, so that a user's second Ctrl-C
+        meanwhile stops at once (it was taken as the retry)."""
+        if self.redeliver:  # not raised meanwhile (features.jit, the command's end)
+            self.retry_due = True
+            _thread.interrupt_main(self.signum)
 
     def report(self) -> None:
         """Write the stop's one line unless it is out already: the main thread's orderly stop, the
@@ -293,6 +325,31 @@ class _Interrupt:
         _, status = self.word_and_status
         self.report()
         os._exit(status)
+
+
+def _in_numba(frame: Any) -> bool:
+    """Whether the signal handler runs in numba's own Python code (``_numba_unpickle``, which every compiled
+    extraction, scan match and ray cast calls, 4-6 times, to box its results): a KeyboardInterrupt raised
+    there left the compiled call with "SystemError: ... returned a result with an exception set" or, when
+    it cut the unpickling short, crashed the process (a segmentation fault: no line, exit -11; 1 in 18 Ctrl-Cs
+    during extract_many, probe 14). The stop is held back (_Interrupt.handler): raised as an extractor's compiled
+    call returns (features.jit.stop_pending), else tried again every REDELIVER_S, REDELIVER_MAX times at most."""
+    name = getattr(frame, "f_globals", {}).get("__name__", "") if frame is not None else ""
+    return isinstance(name, str) and name.startswith("numba.")
+
+
+def _set_jit_stop(pending: bool) -> bool:
+    """Set features.jit's ``stop_pending`` (see _Interrupt.handler) if that module is loaded; whether it is."""
+    jit = sys.modules.get("features.jit")
+    if jit is None:
+        return False
+    jit.stop_pending = pending
+    return True
+
+
+def _jit_stop_pending() -> bool:
+    jit = sys.modules.get("features.jit")
+    return bool(getattr(jit, "stop_pending", False))
 
 
 def _kill_children() -> None:
@@ -472,6 +529,9 @@ def _main(argv: Sequence[str] | None, ended: list[_Interrupt] | None = None) -> 
         sys.stdout = watched  # type: ignore[assignment]
         try:
             status = int(args.func(args) or 0)
+            if interrupt.redeliver and interrupt.in_numba:  # a stop held back in numba's code as the command
+                interrupt._drop_held_stop()  # returned (see _Interrupt.handler): it ended 0 as if not stopped
+                raise KeyboardInterrupt
             done = True
             sys.stdout.flush()  # here, not at exit: a reader that went away (`| head`) is said below
         finally:
@@ -525,6 +585,7 @@ def _main(argv: Sequence[str] | None, ended: list[_Interrupt] | None = None) -> 
         from .options import release_outputs
 
         release_outputs()
+        interrupt._drop_held_stop()  # a stop pending in features.jit ends with its command, not in the next
         if interrupt.timer is None:  # stopped by a signal: the handler stays for the exit's own cleanup
             if interrupt.ended:  # (atexit: Dask closing clusters), where a second Ctrl-C printed a traceback;
                 _ENDED.set()  # it now ends the process at once. A command that ended: kept till the exit

@@ -462,14 +462,15 @@ def _head(path: Path, n: int = 4096, what: str = "an input") -> bytes:
 MAX_ODD_BYTES = 0.05  # share of a log's first 4 KB that may be control bytes or >= 0x80 (a latin-1 comment)
 
 
-def _text_head(path: Path, what: str, utf8: bool = True) -> None:
+def _text_head(path: Path, what: str, utf8: bool = True, head: bytes | None = None) -> None:
     """Raise InputError unless the file starts with text (not binary, not a mislabelled or broken
     compressed file, not an archive), read through gzip / bzip2 / xz where compressed. ``utf8``:
     the text must be UTF-8 (YAML, read as UTF-8); else (a log, read as ASCII with other bytes
     replaced) a byte that is not UTF-8 is text too, unless control bytes or bytes >= 0x80 make up
     more than MAX_ODD_BYTES of the head (a latin-1 comment in a log's first 4 KB refused a log
-    that the same comment further down did not)."""
-    head = _head(path, what=what)
+    that the same comment further down did not). ``head``: the file's first 4 KB where the caller
+    read them already (``check_log``), else read here."""
+    head = _head(path, what=what) if head is None else head
     kind = compression(head)
     named = COMPRESSION_SUFFIXES.get(path.suffix)
     if named and kind != named:
@@ -720,7 +721,7 @@ def check_log(path: str | os.PathLike) -> Path:
         return p
     if not head:
         raise InputError(f"{p}: empty file, not {what}")
-    _text_head(p, what, utf8=False)  # the reader reads ASCII, other bytes replaced
+    _text_head(p, what, utf8=False, head=head)  # the reader reads ASCII, other bytes replaced
     return p
 
 
@@ -903,16 +904,55 @@ def _small_file(path: Path, limit: int) -> bool:
     return stat.S_ISREG(st.st_mode) and st.st_size <= limit
 
 
+def _yaml_read(path: Path) -> tuple[dict | None, str | None]:
+    """The mapping a YAML file holds and None, or None and what keeps it from being one (one line:
+    unreadable, not UTF-8, empty, not YAML, not a mapping, larger than ``MAX_RECORD_YAML_BYTES``)."""
+    try:
+        st = path.stat()
+    except OSError as exc:
+        return None, f"it cannot be read ({exc.strerror or exc})"
+    if not stat.S_ISREG(st.st_mode):
+        return None, "it is not a regular file"
+    if st.st_size > MAX_RECORD_YAML_BYTES:
+        return None, f"it is larger than a record's {MAX_RECORD_YAML_BYTES} bytes"
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        return None, "it is not UTF-8 text"
+    except OSError as exc:
+        return None, f"it cannot be read ({exc.strerror or exc})"
+    if not text.strip():
+        return None, "it is empty"
+    try:
+        raw = load_yaml(text, words=True)  # an earlier version's record may hold a plain n
+    except Exception as exc:  # noqa: BLE001 - whatever it is, it is not a record of a run
+        return None, f"it does not parse as YAML ({' '.join(str(exc).split())[:160]})"
+    if not isinstance(raw, dict):
+        return None, f"it holds a {_kind_of(raw)}, not a mapping"
+    return raw, None
+
+
+def _kind_of(value: Any) -> str:
+    """A YAML value's kind in a message: list, number, text, ..."""
+    return {list: "list", str: "text", bool: "boolean", int: "number", float: "number",
+            type(None): "null"}.get(type(value), type(value).__name__)
+
+
 def _yaml_mapping(path: Path) -> dict | None:
     """The mapping a YAML file holds, or None (unreadable, not UTF-8, not YAML, not a mapping, larger
     than ``MAX_RECORD_YAML_BYTES``)."""
-    if not _small_file(path, MAX_RECORD_YAML_BYTES):
-        return None
-    try:
-        raw = load_yaml(path.read_text(encoding="utf-8"), words=True)  # an earlier version's record may hold a plain n
-    except Exception:  # noqa: BLE001 - whatever it is, it is not a record of a run
-        return None
-    return raw if isinstance(raw, dict) else None
+    return _yaml_read(path)[0]
+
+
+@dataclass(frozen=True)
+class _Recogniser:
+    """A record's recogniser that can say why a file is not the record (``Owner.problem``): ``why``
+    gives None for a record, else what is wrong with it, one line."""
+
+    why: Callable[[Path], str | None]
+
+    def __call__(self, path: Path) -> bool:
+        return self.why(path) is None
 
 
 def _json_object(path: Path) -> dict | None:
@@ -939,28 +979,49 @@ def _csv_header(path: Path) -> list[str]:
 
 def _yaml_has(*keys: str, dicts: Sequence[str] = (), exact: bool = False) -> Callable[[Path], bool]:
     """A recogniser: a YAML mapping with ``keys`` (``exact``: only those), ``dicts`` of them mappings."""
-    def tells(path: Path) -> bool:
-        raw = _yaml_mapping(path)
-        return (raw is not None and (set(raw) == set(keys) if exact else set(keys) <= set(raw))
-                and all(isinstance(raw[k], dict) for k in dicts))
-    return tells
+    def why(path: Path) -> str | None:
+        raw, problem = _yaml_read(path)
+        if raw is None:
+            return problem
+        missing = [k for k in keys if k not in raw]
+        if missing:
+            return "it has no " + ", ".join(f"{k}:" for k in missing)
+        extra = sorted(str(k) for k in raw if k not in keys) if exact else []
+        if extra:
+            return f"it has {extra[0]}:, which such a record does not hold"
+        flat = [k for k in dicts if not isinstance(raw[k], dict)]
+        return f"its {flat[0]}: holds a {_kind_of(raw[flat[0]])}, not a mapping" if flat else None
+    return _Recogniser(why)
 
 
 def _yaml_says(**values: str) -> Callable[[Path], bool]:
     """A recogniser: a YAML mapping whose keys ``values`` hold those values."""
-    def tells(path: Path) -> bool:
-        raw = _yaml_mapping(path)
-        return raw is not None and all(raw.get(k) == v for k, v in values.items())
-    return tells
+    def why(path: Path) -> str | None:
+        raw, problem = _yaml_read(path)
+        if raw is None:
+            return problem
+        for k, v in values.items():
+            if raw.get(k) != v:
+                return f"its {k}: is {repr(raw.get(k))[:80]}, not {v!r}" if k in raw else f"it has no {k}:"
+        return None
+    return _Recogniser(why)
 
 
 def _json_has(**kinds: type) -> Callable[[Path], bool]:
     """A recogniser: a JSON object whose keys ``kinds`` hold values of those types."""
-    def tells(path: Path) -> bool:
+    names = {dict: "an object", list: "a list", str: "text", int: "a whole number"}
+
+    def why(path: Path) -> str | None:
         raw = _json_object(path)
-        return raw is not None and all(isinstance(raw.get(k), t) and not (t is int and isinstance(raw.get(k), bool))
-                                       for k, t in kinds.items())
-    return tells
+        if raw is None:
+            return "it does not read as a JSON object"
+        for k, t in kinds.items():
+            if k not in raw:
+                return f"it has no {k!r}"
+            if not isinstance(raw[k], t) or (t is int and isinstance(raw[k], bool)):
+                return f"its {k!r} is not {names.get(t, t.__name__)}"
+        return None
+    return _Recogniser(why)
 
 
 def _csv_starts(*columns: str) -> Callable[[Path], bool]:
@@ -996,14 +1057,26 @@ def _first_line(start: str) -> Callable[[Path], bool]:
 SLAM_RECORD_KEYS = ("extractor_config", "versions")
 
 
-def _slam_config(path: Path) -> bool:
-    """config.yaml as lmsbench slam writes it (slamrun.write_config): input: and slam: mappings,
-    the slam one with a preset, and nothing else but the records extractor_config: and versions:
-    (mappings; an earlier version wrote neither)."""
-    raw = _yaml_mapping(path)
-    return (raw is not None and {"input", "slam"} <= set(raw) <= {"input", "slam", *SLAM_RECORD_KEYS}
-            and isinstance(raw["input"], dict) and isinstance(raw["slam"], dict) and "preset" in raw["slam"]
-            and all(isinstance(raw[k], dict) for k in SLAM_RECORD_KEYS if k in raw))
+def _slam_config_problem(path: Path) -> str | None:
+    """What keeps ``path`` from being config.yaml as lmsbench slam writes it (slamrun.write_config): input:
+    and slam: mappings, the slam one with a preset, and nothing else but the records extractor_config: and
+    versions: (mappings; an earlier version wrote neither); None when it is one."""
+    raw, problem = _yaml_read(path)
+    if raw is None:
+        return problem
+    missing = [k for k in ("input", "slam") if k not in raw]
+    if missing:
+        return "it has no " + ", ".join(f"{k}:" for k in missing)
+    extra = sorted(str(k) for k in raw if k not in ("input", "slam", *SLAM_RECORD_KEYS))
+    if extra:
+        return f"it has {extra[0]}:, which such a record does not hold"
+    flat = [k for k in ("input", "slam", *SLAM_RECORD_KEYS) if k in raw and not isinstance(raw[k], dict)]
+    if flat:
+        return f"its {flat[0]}: holds a {_kind_of(raw[flat[0]])}, not a mapping"
+    return None if "preset" in raw["slam"] else "its slam: has no preset:"
+
+
+_slam_config = _Recogniser(_slam_config_problem)
 
 
 @dataclass(frozen=True)
@@ -1051,6 +1124,18 @@ class Owner:
             return set()
         told = self.told(folder)
         return {n for n in writes.present(folder) if n in told or n not in self.records}
+
+    def problem(self, folder: Path) -> tuple[str, str] | None:
+        """The first record of ``folder`` present but not told as this command's, with what is wrong
+        with it (one line), where no record there is told: a hand-damaged sweep.yaml (truncated,
+        wrong types) beside a sweep's cells was refused as any user's folder, naming no record."""
+        if self.told(folder):
+            return None
+        for name, tells in self.records.items():
+            if (folder / name).is_file() and not tells(folder / name):
+                why = tells.why(folder / name) if isinstance(tells, _Recogniser) else None
+                return name, why or f"it is not the {name} such a run writes"
+        return None
 
     def foreign(self, folder: Path, writes: OutTree) -> list[str]:
         """The output files of ``folder`` this run would replace that no earlier run wrote."""
@@ -1199,10 +1284,13 @@ def check_out(path: str | os.PathLike | None, writes: Sequence[str] | OutTree | 
                                  "give another folder")
             if theirs:
                 shown = " and ".join(theirs) if len(theirs) <= 3 else ", ".join(theirs[:3]) + f" and {len(theirs) - 3} more"
+                damaged = owner.problem(p) if any(n not in owner.records for n in theirs) else None
+                said = (f" (its record {p / damaged[0]} is not one such a run leaves: {damaged[1]})"
+                        if damaged is not None else "")
                 raise InputError(f"--out {p}: holds {shown}, which this run would replace but no earlier "
-                                 f"{owner.named} run wrote; give a new or empty folder")
+                                 f"{owner.named} run wrote{said}; give a new or empty folder")
         _check_replaceable(p, tree if replaces is None else replaces, removed=patterns)
-    parent = _nearest_existing(p)
+    parent = nearest_existing(p)
     if not _writable_folder(parent):
         raise InputError(f"--out {p}: {parent} is not a writable folder")
     hold_output(p, make=True)  # a new folder is made here to be locked (removed as the command ends if still empty)
@@ -1435,15 +1523,18 @@ def _check_default_base(base: Path) -> None:
     check_link(base)
     if base.exists() and not base.is_dir():
         raise InputError(f"{base} (where a run without --out goes) exists and is not a folder; give --out")
-    parent = _nearest_existing(base)
+    parent = nearest_existing(base)
     if not _writable_folder(parent):
         what = "a writable folder" if parent.is_dir() else "a folder"
         raise InputError(f"{parent} is not {what}, so a run without --out cannot be made in {base}; give --out")
 
 
-def _nearest_existing(p: Path) -> Path:
-    """``p`` or its nearest parent that exists (where a folder to be made goes)."""
-    while not p.exists():
+def nearest_existing(p: Path, links: bool = False) -> Path:
+    """``p`` or its nearest parent that exists (where a folder to be made goes), the root at most.
+    ``links``: a dangling symbolic link counts as existing and is where it stops (the sweep's folders,
+    ``sweep.store``, say such a link is no folder to make one in); without, it is walked past to the
+    folder that holds it (``check_out`` then checks that folder)."""
+    while not (p.exists() or (links and p.is_symlink())) and p != p.parent:
         p = p.parent
     return p
 

@@ -16,7 +16,7 @@ import math
 import sys
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pandas as pd
@@ -88,8 +88,10 @@ def long_run(seed: int, duration: float, rate: float) -> pd.DataFrame:
                           "cpu_scans_per_s": len(records) / cpu}])
 
 
-def read_mit(path: Path) -> SlamInput:
+def read_mit(path: Path, log: Path | None = None) -> SlamInput:
     """The MIT CSAIL log at ``path``, read whole, with its relations (``NAME.relations`` beside it).
+    ``log``: ``options.check_log(path)`` where the caller has it already (``--mit LOG``, checked as it
+    is parsed: its head was read again here), else it is checked here (the default log).
 
     Raises:
         LmsbenchError: not a log (``options.check_log``, then the reader), or no relations beside it
@@ -97,7 +99,7 @@ def read_mit(path: Path) -> SlamInput:
     from experiments.options import InputError, check_log
     from experiments.slamrun import load_input
 
-    data = load_input(check_log(path))
+    data = load_input(check_log(path) if log is None else log)
     if data.relations is None:
         raise InputError(f"--mit {path}: no relations file beside it (NAME.relations), which the relations error "
                          "is scored against")
@@ -232,10 +234,11 @@ def main(argv: list[str] | None = None) -> int:
     shortest = min_duration()
     ap.add_argument("--duration", type=number(shortest, MAX_DURATION_S, unit="s"), default=90.0,
                     help=f"duration (s) of each simulated run, at least {shortest:g}: two scans at 5 scans/s (default 90)")
-    ap.add_argument("--mit", type=_mit, default=MIT_LOG,
+    ap.add_argument("--mit", type=_mit, default=MIT_LOG, action=_MitLog,
                     help="MIT CSAIL log, with its NAME.relations beside it, or 'none' for no MIT CSAIL run (default: "
                          "shared/data/carmen/mit-csail.clf.gz beside the checkout, none where absent)")
     ap.add_argument("--long", type=_long, default=900.0, help="duration (s) of the consistency run (default 900; 0: none)")
+    ap.set_defaults(mit_log=None)
     args = ap.parse_args(argv)
     try:  # a user error is one line, exit 2, as the CLI's (an existing file as --out was a FileExistsError traceback)
         check_out(args.out, OUTPUTS, owner=SLAMEVAL_OWNER)  # only an earlier run's files are replaced
@@ -245,9 +248,19 @@ def main(argv: list[str] | None = None) -> int:
     return 2
 
 
-def _mit(text: str) -> Path | None:
-    """An argparse type: ``--mit``'s log, which must exist, or None for the word 'none' (a log given that
-    did not exist was passed over in silence, and the run wrote no MIT CSAIL table)."""
+class _MitLog(argparse.Action):
+    """``--mit``: the log as given (``args.mit``, as slameval.yaml records it) and as ``check_log``
+    returned it when parsed (``args.mit_log``, which :func:`read_mit` reads: it checked the log again)."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: Any,
+                 option_string: str | None = None) -> None:
+        namespace.mit, namespace.mit_log = values if values is not None else (None, None)
+
+
+def _mit(text: str) -> tuple[Path, Path] | None:
+    """An argparse type: ``--mit``'s log, which must exist, as given and as ``check_log`` returns it, or
+    None for the word 'none' (a log given that did not exist was passed over in silence, and the run wrote
+    no MIT CSAIL table)."""
     if text.strip().lower() == "none":
         return None
     from experiments.options import check_log, mid_sentence
@@ -255,12 +268,12 @@ def _mit(text: str) -> Path | None:
 
     path = path_arg(text)
     try:  # as `lmsbench slam` checks a log: what stands in its place, a name too long (a traceback here)
-        check_log(path)
+        log = check_log(path)
     except LmsbenchError as exc:
         raise argparse.ArgumentTypeError(f"{exc} (give 'none' for no MIT CSAIL run)") from None
     except OSError as exc:  # in the words of the CLI's: "NAME: file name too long"
         raise argparse.ArgumentTypeError(f"{exc.filename or text}: {mid_sentence(exc.strerror or str(exc))}") from None
-    return path
+    return path, log
 
 
 def record(args: argparse.Namespace) -> str:
@@ -283,7 +296,7 @@ def _run(args: argparse.Namespace) -> int:
         print(f"no MIT CSAIL log at {MIT_LOG}: no MIT CSAIL run (give --mit LOG, or --mit none to say so)",
               file=sys.stderr)
         args.mit = None
-    data = None if args.mit is None else read_mit(args.mit)
+    data = None if args.mit is None else read_mit(args.mit, getattr(args, "mit_log", None))
     args.out.mkdir(parents=True, exist_ok=True)
     # before any is written: a stopped run leaves no mix; only the files an earlier run's record tells as its own
     # (check_out refused any other: a user's long.parquet in the folder was removed by its name alone)

@@ -126,13 +126,20 @@ class LogScans:
 
     def __init__(self, open_log: Callable[[], Iterable[Record]], where: str, rows: ScanRows | None = None) -> None:
         rows = rows if rows is not None else ScanRows()
+        self._hold(open_log, where, rows.numbers.taken(), rows.stamps.taken(), rows.crcs.taken(), rows.shapes.taken(),
+                   list(rows.geometries), rows.odom.taken(), rows.truth.taken(), rows.corrected.taken())
+
+    def _hold(self, open_log: Callable[[], Iterable[Record]], where: str, numbers: np.ndarray, stamps: np.ndarray,
+              crcs: np.ndarray, shapes: np.ndarray, geometries: list[tuple[int, float, float]],
+              odom: np.ndarray | None, truth: np.ndarray | None, corrected: np.ndarray | None) -> None:
+        """Set the rows held (``__init__`` from a ScanRows, :meth:`taken` from another LogScans' arrays)."""
         self.open_log, self.where = open_log, where  # a new reader for each pass: two passes at once share nothing
-        self.numbers: np.ndarray = rows.numbers.taken()  # the log's own scan number of each (from 0)
-        self.stamps: np.ndarray = rows.stamps.taken()  # s
-        self.crcs: np.ndarray = rows.crcs.taken()
-        self.shapes: np.ndarray = rows.shapes.taken()  # rows of ``geometries``
-        self.geometries: list[tuple[int, float, float]] = list(rows.geometries)  # (beams, angle_increment, range_max)
-        self.odom, self.truth, self.corrected = rows.odom.taken(), rows.truth.taken(), rows.corrected.taken()
+        self.numbers: np.ndarray = numbers  # the log's own scan number of each (from 0)
+        self.stamps: np.ndarray = stamps  # s
+        self.crcs: np.ndarray = crcs
+        self.shapes: np.ndarray = shapes  # rows of ``geometries``
+        self.geometries: list[tuple[int, float, float]] = geometries  # (beams, angle_increment, range_max)
+        self.odom, self.truth, self.corrected = odom, truth, corrected  # (n, 3) or None
         # id(scan) -> (a weak reference to it, its index) of the scans the last pass gave that live, the last
         # RECENT_SCANS at most: no scan is kept alive, and a new object at a freed scan's address is none of them
         self._recent: dict[int, tuple[weakref.ref, int]] = {}
@@ -146,10 +153,9 @@ class LogScans:
         keep = np.asarray(keep, dtype=np.int64)
         if keep.size > 1 and not (np.diff(keep) > 0).all():  # a pass reads the log once, in order
             raise ValueError("LogScans.taken: the indices must rise (a pass reads the log in its order)")
-        out = LogScans(self.open_log, self.where)
-        out.numbers, out.stamps, out.crcs, out.shapes = (a[keep] for a in (self.numbers, self.stamps, self.crcs, self.shapes))
-        out.geometries = self.geometries
-        out.odom, out.truth, out.corrected = (None if a is None else a[keep] for a in (self.odom, self.truth, self.corrected))
+        out = LogScans.__new__(LogScans)  # built from these arrays (an empty ScanRows was made, then written over)
+        out._hold(self.open_log, self.where, self.numbers[keep], self.stamps[keep], self.crcs[keep], self.shapes[keep],
+                  self.geometries, *(None if a is None else a[keep] for a in (self.odom, self.truth, self.corrected)))
         return out
 
     def __iter__(self) -> Iterator[Record]:
@@ -425,7 +431,7 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
         FileNotFoundError: the input does not exist.
         LmsbenchError: a folder without scans.clf, a simulate folder whose run did not finish
             (options.check_simulate_finished), an input without scans, or none with a valid beam, or
-            more than one scan read and all of one stamp (no time between scans for the motion model), or
+            more than one scan read, or kept, and all of one stamp (no time between scans for the motion model), or
             one scan to run on (an input of one scan, ``max_scans`` below 2, ``rate_hz`` / ``every`` that
             keep one scan of several), or ``every`` other than 1 beside ``rate_hz`` (give one).
     """
@@ -508,8 +514,9 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
 
     rows = ScanRows()  # one compact row a scan kept: the scans are read again at each pass (LogScans)
     reader = read_log(log, **(read_options or {}))
-    first_stamp, last_stamp, n_read, timed = None, None, 0, False  # timed: some scan read has another stamp than the first
+    first_stamp, last_stamp, n_read, timed, rows_first_stamp = None, None, 0, False, 0.0  # timed: some scan read has another stamp than the first
     kept_stamp = None  # the stamp of the last scan kept
+    kept_timed = False  # some scan kept has another stamp than the first kept
     from lms200.units import UnitsTally
 
     tally, valid = UnitsTally(), False  # the scans kept: their units (all of them), a valid beam in some
@@ -529,6 +536,10 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
             check_beams(rec.scan, f"{log}: scan {k}")
             if config is not None and not len(rows):
                 check_first_scan(rec.scan, config, f"{log}: scan {k}")
+            if len(rows):
+                kept_timed = kept_timed or rec.scan.stamp != rows_first_stamp
+            else:
+                rows_first_stamp = rec.scan.stamp
             rows.append(k, rec)
             kept_stamp = rec.scan.stamp
             if not valid:
@@ -547,12 +558,18 @@ def load_input(path: str | Path, relations: str | Path | None = None, every: int
     if not len(records):
         raise LmsbenchError(f"{log}: no laser scans found")
     if n_read > 1 and not timed:  # it ran: every step predicted no motion and searched no turn
-        raise LmsbenchError(f"{log}: all {n_read} scans read have the same stamp ({fixed(first_stamp)} s); SLAM's "
-                            "motion model needs the time between scans (a log written without a clock?)")
+        from slam.run import same_stamp_problem
+
+        raise LmsbenchError(f"{log}: {same_stamp_problem(n_read, first_stamp)}")
     if len(records) == 1 and n_read > 1 and (rate_hz is not None or every > 1):  # it ran: a "SLAM" of one scan
         flag = f"--rate-hz {rate_hz:g}" if rate_hz is not None else f"--every {every}"
         raise LmsbenchError(f"{log}: {flag} keeps 1 of the {n_read} scans read (stamps {fixed(first_stamp)} to "
                             f"{fixed(last_stamp)} s); SLAM needs two or more")
+    if len(records) > 1 and not kept_timed:  # the scans read had stamps, those kept one: it ran, then run_slam refused
+        flags = " and ".join(([f"--every {every}"] if every > 1 else [])  # it as "all 5 scans read have the same
+                             + ([f"--max-scans {max_scans}"] if max_scans is not None else []))  # stamp", of 10 read
+        raise LmsbenchError(f"{log}: {flags or 'the selection'} keeps {len(records)} of the {n_read} scans read, all "
+                            f"stamped {fixed(rows_first_stamp)} s; SLAM's motion model needs the time between scans")
     if len(records) == 1:  # it ran and reported a healthy run of no step (matched fraction 1 of 0 steps)
         raise LmsbenchError(f"{log}: holds one scan (stamp {fixed(first_stamp)} s); SLAM needs two or more")
     if not valid:

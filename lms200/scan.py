@@ -312,6 +312,11 @@ def _number(name: str, value: object) -> float:
     1 rad or 1 m), non-numbers, ints beyond float64 (10**400) and nan / inf."""
     if isinstance(value, NOT_NUMBER_ITEMS):  # numpy's complex: float() gave its real part
         raise ScanError(f"{name}: must be a number, got {value!r}")
+    if isinstance(value, np.ma.MaskedArray):
+        if value.size != 1:  # not "a masked value (it has none)", nor numpy's repr over several lines
+            raise ScanError(f"{name}: must be a number, got a masked array of {value.size} values")
+        if np.ma.is_masked(value):  # float() warned, then gave nan
+            raise ScanError(f"{name}: must be a number, got a masked value (it has none)")
     try:
         number = float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):

@@ -93,6 +93,7 @@ class OfficeEnv(gym.Env):
 
     # -- Gymnasium API ------------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None) -> tuple[np.ndarray, dict]:
+        self._check_open("reset")
         if seed is not None:
             check_seed(seed)  # Gymnasium's own error otherwise (and a numpy one for 2**64)
             seed = int(seed)  # Gymnasium takes Python ints only (numpy's are refused)
@@ -106,6 +107,7 @@ class OfficeEnv(gym.Env):
         return self._observe(None), self._info()
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict]:
+        self._check_open("step")
         if self._scan is None:  # no episode: it stepped from pose (0, 0, 0), unseeded, with a reward and no word
             raise InputError("step: no episode yet: call reset() first (gymnasium.make's env says so too)")
         space = self.action_space
@@ -159,7 +161,15 @@ class OfficeEnv(gym.Env):
         return image
 
     def close(self) -> None:
+        """Release the simulator's PyBullet client (idempotent); the environment takes no step or reset after it."""
         self.sim.close()
+
+    def _check_open(self, call: str) -> None:
+        """InputError for ``step`` or ``reset`` after :meth:`close`: it was PyBullet's TypeError
+        ("'NoneType' object cannot be interpreted as an integer"), naming nothing."""
+        if self.sim.client is None:
+            raise InputError(f"{call}: the environment is closed (close() was called); make a new one "
+                             "(gymnasium.make or sim.gym_env.OfficeEnv)")
 
 
 def _action(action: object) -> np.ndarray:

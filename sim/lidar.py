@@ -231,6 +231,8 @@ class LMS200Sim:
         """Bullet's first hit on each ray from ``origins`` (n, 2) along (ux, uy) between ``near``
         and ``far`` m: (n,) solids hit (boxes numbered first, then cylinders; -1 for none) and
         distances from the origin (m)."""
+        if self.client is None:  # pybullet's "'NoneType' object cannot be interpreted as an integer"
+            raise InputError("LMS200Sim: closed (close() was called), so it casts no ray; make a new one")
         n = len(ux)
         a, b = np.empty((n, 3)), np.empty((n, 3))
         a[:, 2] = b[:, 2] = self.world.scan_height

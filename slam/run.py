@@ -11,7 +11,7 @@ from typing import Any, Iterable, Iterator, Sequence, Sized
 import numpy as np
 
 from lms200.errors import LmsbenchWarning
-from lms200.finite import shown
+from lms200.finite import fixed, shown
 from lms200.logs import MAX_COORD_M, checked_records
 from lms200.records import Record, pose_problem
 from lms200.units import reader_watches, units_watched
@@ -425,7 +425,9 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig(), max_s
         SlamResult with one pose per record, stamped with the record's ``scan.stamp``.
 
     Raises:
-        SlamInputError: an item that is no Record (naming its index), scans out of time order, a
+        SlamInputError: an item that is no Record (naming its index), scans out of time order, two
+            or more scans all of one stamp (``same_stamp_problem``, as ``lmsbench slam`` says it: a list
+            or tuple before any work, another source at its end), a
             ``max_scans`` that is no integer >= 1, a sized ``records`` of more than ``MAX_SLAM_SCANS``
             with no ``max_scans``.
     """
@@ -438,6 +440,7 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig(), max_s
         iter(records)
     except TypeError:
         raise SlamInputError(f"records: must be an iterable of lms200.Record, got {type(records).__name__}") from None
+    given = records
     watched = reader_watches(records)  # a bare log reader's pass looks at its first scans' units itself
     # an int past sys.maxsize is no count islice takes (a raw ValueError); no source holds that many
     capped: Iterable[Any] = (Capped(records, "records") if max_scans is None
@@ -449,15 +452,23 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig(), max_s
         # reader's pass says it itself)
         records = units_watched(records, "records")
     range_maxes: set[float] = set()
+    _check_one_stamp_given(given, max_scans)
 
     def seen(records: Iterable[Record]) -> Iterator[Record]:
         """The records, the first scan checked against the config before any matching or extraction
-        (:func:`check_first_scan`), each scan's range_max noted."""
+        (:func:`check_first_scan`), each scan's range_max noted; after the last, SlamInputError where
+        there were two or more and all of one stamp (an iterator's, known only at its end)."""
+        n, first, timed = 0, 0.0, False
         for i, rec in enumerate(records):
             if i == 0:
                 check_first_scan(rec.scan, config, "records[0]")
+                first = float(rec.scan.stamp)
+            timed = timed or float(rec.scan.stamp) != first
             range_maxes.add(float(rec.scan.range_max))
+            n = i + 1
             yield rec
+        if n > 1 and not timed:
+            raise SlamInputError(f"records: {same_stamp_problem(n, first)}")
 
     records = seen(records)
     if config.preset == "default":
@@ -483,6 +494,30 @@ def run_slam(records: Iterable[Record], config: SlamConfig = SlamConfig(), max_s
     if isinstance(capped, Capped):
         capped.warn(stacklevel=2)
     return result
+
+
+def same_stamp_problem(n: int, stamp: float) -> str:
+    """Why ``n`` (> 1) scans all stamped ``stamp`` (s) are no SLAM input, one line: every step would
+    predict no motion and search no turn (``lmsbench slam`` refused such a log, ``run_slam`` ran it)."""
+    return (f"all {n} scans read have the same stamp ({fixed(stamp)} s); SLAM's motion model needs the "
+            "time between scans (a log written without a clock?)")
+
+
+def _check_one_stamp_given(records: object, max_scans: int | None) -> None:
+    """SlamInputError before any work where ``records`` is a list or tuple of two or more Records
+    (of the first ``max_scans``) all of one stamp; other sources are checked at their end (``seen``)."""
+    if not isinstance(records, (list, tuple)):
+        return
+    taken = records if max_scans is None else records[: int(max_scans)]
+    if len(taken) < 2 or not all(isinstance(r, Record) for r in taken):
+        return  # an item that is no Record is checked_records' error, naming its index
+    try:
+        first = float(taken[0].scan.stamp)
+        one_stamp = all(float(r.scan.stamp) == first for r in taken)
+    except (TypeError, ValueError, AttributeError):
+        return  # a stamp that is no number is checked_records' error
+    if one_stamp:
+        raise SlamInputError(f"records: {same_stamp_problem(len(taken), first)}")
 
 
 def check_first_scan(scan: Any, config: SlamConfig, where: str = "records[0]") -> None:

@@ -484,6 +484,29 @@ def test_gym_step_before_reset_is_refused() -> None:
     assert env.step(np.array([0.1, 0.0]))[4]["progress_m"] >= 0
 
 
+def test_gym_step_or_reset_after_close_is_refused_and_close_twice_is_fine() -> None:
+    """Probe 14: step or reset after close() was PyBullet's TypeError ("'NoneType' object cannot be
+    interpreted as an integer"), naming nothing, through gymnasium.make's env too; so was a scan of a
+    closed LMS200Sim. Now an InputError saying the environment (or simulator) is closed."""
+    import gymnasium
+
+    from sim.gym_env import OfficeEnv
+
+    closed = "the environment is closed (close() was called); make a new one (gymnasium.make or sim.gym_env.OfficeEnv)"
+    for env in (OfficeEnv(), gymnasium.make("lmsbench/Office-v0")):
+        env.reset(seed=0)
+        env.close()
+        env.close()  # twice: fine
+        with pytest.raises(InputError, match=f"^step: {re.escape(closed)}$"):
+            env.step(np.array([0.1, 0.0], dtype=np.float32))
+        with pytest.raises(InputError, match=f"^reset: {re.escape(closed)}$"):
+            env.reset(seed=1)
+    env = OfficeEnv()
+    env.sim.close()
+    with pytest.raises(InputError, match=r"^LMS200Sim: closed \(close\(\) was called\), so it casts no ray; make a new one$"):
+        env.sim.scan_at((0.0, 0.0, 0.0))
+
+
 @pytest.mark.parametrize("seed", [-1, 1.5, "a"])
 def test_gym_reset_seed_must_be_a_whole_number(seed: object) -> None:
     """reset(seed=-1) raised Gymnasium's own error, not an LmsbenchError."""
@@ -544,6 +567,37 @@ def test_run_slam_config_of_the_wrong_type(config: object) -> None:
 
     with pytest.raises(SlamInputError, match="^config: must be a slam.SlamConfig"):  # was AttributeError
         run_slam([Record(scan=Scan.lms200(np.full(361, 3.0)))], config)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("preset", ["default", "paper"])
+@pytest.mark.parametrize("source", ["list", "tuple", "generator"])
+def test_run_slam_refuses_records_all_of_one_stamp_as_lmsbench_slam_does(source: str, preset: str, monkeypatch) -> None:
+    """run_slam took 10 scans all stamped 3 s and returned a trajectory (the default preset turned and
+    moved the robot in zero time, the paper preset predicted no motion), where `lmsbench slam` refuses
+    such a log; now the same check and message (slam.run.same_stamp_problem), a list or tuple before
+    any work (nothing matched, nothing extracted), a generator at its end. Two stamps, or one scan, still run."""
+    import slam.run
+    import slam.scanslam
+    from slam import SlamConfig, run_slam
+    from slam.run import SlamInputError
+
+    scans = [Record(scan=Scan.lms200(np.full(361, 3.0 + 0.01 * k), stamp=3.0)) for k in range(10)]
+    made = {"list": list, "tuple": tuple, "generator": lambda s: (r for r in s)}[source]
+    worked: list[int] = []
+    if source != "generator":
+        monkeypatch.setattr(slam.scanslam, "run_scan_slam", lambda *a, **k: worked.append(1))
+        monkeypatch.setattr(slam.run, "_observed", lambda *a, **k: worked.append(1) or iter(()))
+    message = ("records: all 10 scans read have the same stamp (3.000000 s); SLAM's motion model needs the time "
+               "between scans (a log written without a clock?)")
+    with pytest.raises(SlamInputError, match=f"^{re.escape(message)}$"):
+        run_slam(made(scans), SlamConfig(preset=preset))
+    assert worked == []
+    with pytest.raises(SlamInputError, match=r"^records: all 4 scans read have the same stamp \(3\.000000 s\)"):
+        run_slam(made(scans), SlamConfig(preset=preset), max_scans=4)
+    monkeypatch.undo()
+    assert len(run_slam(made(scans[:1]), SlamConfig(preset=preset)).trajectory) == 1
+    timed = [*scans[:-1], Record(scan=scans[-1].scan.replace(stamp=3.5))]
+    assert len(run_slam(made(timed), SlamConfig(preset=preset)).trajectory) == 10
 
 
 # -- Record -------------------------------------------------------------------------------------------
@@ -2289,3 +2343,56 @@ def test_an_empty_path_is_refused_as_empty_not_read_as_the_current_folder(call) 
     pathlib reads "" as the current folder (probe 13)."""
     with pytest.raises(InputError, match=r"^path: empty \('\s*'\); give a file or folder name$"):
         call()
+
+
+def test_ctrl_c_inside_a_compiled_extraction_is_a_keyboard_interrupt() -> None:
+    """Probe 14: Ctrl-C during extract_many (Jupyter's interrupt too) came out, more than half the time, as
+    "SystemError: <built-in method extract_batch ...> returned a result with an exception set" over five
+    chained tracebacks: Python's handler raised the KeyboardInterrupt inside numba's _numba_unpickle, which
+    the compiled call runs to box its results. features.jit.FixedTypeCall raises that KeyboardInterrupt
+    itself; any other SystemError is as it was."""
+    from features.jit import FixedTypeCall
+
+    def interrupted_entry(*args: object) -> object:
+        try:
+            raise KeyboardInterrupt
+        except KeyboardInterrupt as exc:
+            raise SystemError("<function _numba_unpickle> returned a result with an exception set") from exc
+
+    call = FixedTypeCall(None)  # type: ignore[arg-type]
+    call.entry = interrupted_entry
+    with pytest.raises(KeyboardInterrupt) as info:
+        call(1.0)
+    assert info.value.__suppress_context__
+    call.entry = lambda *args: (_ for _ in ()).throw(SystemError("another"))
+    with pytest.raises(SystemError, match="^another$"):
+        call(1.0)
+
+
+def test_a_genuine_system_error_of_a_compiled_call_keeps_its_cause_and_context() -> None:
+    """A review: FixedTypeCall raised every SystemError ``from None``, a genuine one too (not over a
+    KeyboardInterrupt), stripping the cause and context that say where it came from."""
+    from features.jit import FixedTypeCall
+
+    def failing_entry(*args: object) -> object:
+        try:
+            raise ValueError("the reason")
+        except ValueError as exc:
+            raise SystemError("<built-in method extract_batch> returned NULL without setting an exception") from exc
+
+    def failing_while_handling(*args: object) -> object:
+        try:
+            raise ValueError("the context")
+        except ValueError:
+            raise SystemError("error return without exception set")  # noqa: B904 - the implicit context
+
+    call = FixedTypeCall(None)  # type: ignore[arg-type]
+    call.entry = failing_entry
+    with pytest.raises(SystemError, match="returned NULL") as info:
+        call(1.0)
+    assert isinstance(info.value.__cause__, ValueError) and str(info.value.__cause__) == "the reason"
+    call.entry = failing_while_handling
+    with pytest.raises(SystemError, match="^error return without exception set$") as info:
+        call(1.0)
+    assert info.value.__cause__ is None and not info.value.__suppress_context__
+    assert isinstance(info.value.__context__, ValueError) and str(info.value.__context__) == "the context"

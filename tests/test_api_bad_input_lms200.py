@@ -376,3 +376,38 @@ def test_quarter_degree_midpoints_of_too_close_and_no_return_are_not_valid_witho
     assert codes.tolist() == [2000] * 401
     codes = virtual.variant_codes(np.roll(ranges, 80), (100, 25), "mm")  # beam 90 = -inf, 91 = +inf, 100 = -inf
     assert codes[[20, 21, 22, 39, 40, 41]].tolist() == [8191, 8191, 8183, 8191, 8191, 8191]
+
+
+@pytest.mark.parametrize("field", ["angle_min", "angle_increment", "range_min", "range_max", "stamp"])
+def test_a_masked_scalar_field_of_a_scan_is_refused_as_masked_without_numpys_warning(field: str) -> None:
+    """Probe 14: Scan(..., angle_min=np.ma.masked) printed numpy's 'UserWarning: Warning: converting a masked
+    element to nan.' and then said 'angle_min: must be finite, got nan', a value no one gave. Now one
+    ScanError saying it is masked, no warning; an unmasked masked scalar is its value, as before."""
+    import warnings
+
+    from lms200 import Scan
+    from lms200.errors import ScanError
+
+    kw: dict = dict(angle_min=-np.pi / 2, angle_increment=np.pi / 360, range_min=0.0, range_max=8.183, stamp=0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for masked in (np.ma.masked, np.ma.masked_array(1.0, mask=True)):
+            with pytest.raises(ScanError, match=rf"^{field}: must be a number, got a masked value \(it has none\)$"):
+                Scan(np.full(361, 2.0), **{**kw, field: masked})
+        scan = Scan(np.full(361, 2.0), **{**kw, field: np.ma.masked_array(kw[field])})
+    assert getattr(scan, field) == kw[field]
+
+
+def test_a_masked_array_of_several_values_as_a_scalar_field_is_named_so() -> None:
+    """A review: Scan(angle_min=np.ma.array([1., 2.], mask=[True, False])) said "got a masked value (it
+    has none)": it is a masked array of 2 values, which has a value (numpy's repr was several lines)."""
+    from lms200 import Scan
+    from lms200.errors import ScanError
+
+    kw: dict = dict(angle_increment=np.pi / 360, range_min=0.0, range_max=8.183)
+    for value, n in ((np.ma.array([1.0, 2.0], mask=[True, False]), 2), (np.ma.array([1.0, 2.0, 3.0]), 3),
+                     (np.ma.array([], dtype=float), 0)):
+        with pytest.raises(ScanError, match=rf"^angle_min: must be a number, got a masked array of {n} values$"):
+            Scan(np.full(361, 2.0), angle_min=value, **kw)
+    with pytest.raises(ScanError, match=r"^angle_min: must be a number, got a masked value \(it has none\)$"):
+        Scan(np.full(361, 2.0), angle_min=np.ma.array([1.0], mask=[True]), **kw)

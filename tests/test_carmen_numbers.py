@@ -137,3 +137,49 @@ def test_unique_and_noisy_start_words_are_not_parsed_one_by_one(tmp_path, monkey
         assert sum(per_line) <= most, (name, sum(per_line))  # 791: each code once
         if name == "noisy":  # the code scans after the noisy start are parsed through the cache again
             assert sum(per_line[-100:]) <= 100 and per_line[-1] == 0, per_line[-100:]
+
+
+def test_a_nonzero_number_below_float64_makes_its_line_malformed_as_one_beyond_it_does(tmp_path) -> None:
+    """A range written 1e-400 was read as 0.0 m, a logger's "no reading", silently, where 1e400 made its
+    line malformed: strtod says ERANGE for both. Both are now malformed, in a range (through the pass's
+    word cache, warm or not) or a pose; a zero written as one (0, 0.00, 0e-400, -0) is 0 as before."""
+    path = tmp_path / "tiny.log"
+    path.write_text(_flaser("1.00 2.00", 1.0) + _flaser("1e-400 2.00", 2.0) + _flaser("1.00 2.00", 3.0)
+                    + _flaser("1.00 1e-400", 4.0) + "ODOM 1e-400 0 0 0 0 0 5 h 5\n"
+                    + _flaser("0 0.00 0e-400 -0", 6.0))
+    reader = read_log(path, skip_bad_lines=True)
+    records = list(reader)
+    assert [r.scan.stamp for r in records] == [1.0, 3.0, 6.0]
+    assert records[-1].scan.ranges.tolist() == [0.0, 0.0, 0.0, 0.0]
+    assert reader.stats.skipped == [
+        (2, "FLASER: FLASER ranges: '1e-400' is below float64's range (nonzero, it would read as 0)"),
+        (4, "FLASER: FLASER ranges: '1e-400' is below float64's range (nonzero, it would read as 0)"),
+        (5, "ODOM: ODOM: '1e-400' is below float64's range (nonzero, it would read as 0)")]
+    for parse in (_floats, _few_floats, lambda w, what: _range_floats(w, what, _RangeWords())):
+        with pytest.raises(ValueError, match=r"^r: '-2\.5e-999' is below float64's range"):
+            parse(["1.0", "-2.5e-999"], "r")
+
+
+def test_a_zero_written_without_an_exponent_is_not_asked_whether_it_underflowed(tmp_path, monkeypatch) -> None:
+    """A review: underflow_problem was asked of every word read as 0 (the Intel log's 45,737 '0' ranges:
+    ~30 % of its reading). A word with no 'e' shorter than 320 characters cannot be a nonzero number read
+    as 0 (that needs 323 zeros after the point), so it is not asked; those that can still are refused."""
+    asked: list[str] = []
+    real = carmen.underflow_problem
+
+    def counted(text: str, value: float) -> str | None:
+        asked.append(text)
+        return real(text, value)
+
+    monkeypatch.setattr(carmen, "underflow_problem", counted)
+    path = tmp_path / "zeros.log"
+    path.write_text(_flaser("0 0.00 -0 1.5", 1.0) + _flaser("0 2.0 0 0", 2.0) + "ODOM 0 0 0 0 0 0 3 h 3\n")
+    records = list(read_log(path))
+    assert [r.scan.ranges.tolist() for r in records] == [[0.0, 0.0, 0.0, 1.5], [0.0, 2.0, 0.0, 0.0]]
+    assert asked == []
+    for parse in (_floats, _few_floats, lambda w, what: _range_floats(w, what, _RangeWords())):
+        assert list(parse(["0", "0.000", "0e5"], "r")) == [0.0, 0.0, 0.0]
+        tiny = "0." + "0" * 400 + "1"  # no exponent, nonzero, read as 0
+        with pytest.raises(ValueError, match=r"^r: '0\.0000.*1' is below float64's range"):
+            parse(["1.0", tiny], "r")
+    assert asked and all("e" in w or len(w) > 320 for w in asked)

@@ -295,9 +295,11 @@ def test_the_slam_evaluation_replaces_only_an_earlier_runs_outputs(tmp_path: Pat
             slameval.main(["--out", str(out), "--seeds", "0", "--long", "0", "--mit", str(bad)])
         assert stop.value.code == 2
         shown = " and ".join(mine)
+        said = (f" (its record {out / 'slameval.yaml'} is not one such a run leaves: its command: is 'mine', not "
+                "'python -m experiments.slameval')" if "tables.md" in mine else "")
         assert capsys.readouterr().err.startswith(
             f"python -m experiments.slameval: error: --out {out}: holds {shown}, which this run would replace but no "
-            "earlier python -m experiments.slameval run wrote; give a new or empty folder"), mine
+            f"earlier python -m experiments.slameval run wrote{said}; give a new or empty folder"), mine
         assert {p.name: p.read_text() for p in out.iterdir()} == mine
     # a folder written before slameval.yaml, told by its sim.parquet's columns, was refused as no earlier run's:
     # it passes the folder's check (and the log given, no log, is refused after it)
@@ -405,3 +407,28 @@ def test_info_says_on_how_many_scans_odometry_or_truth_is_when_not_on_all(tmp_pa
     assert main(["info", str(tmp_path / "all.clf")]) == 0
     out = capsys.readouterr().out
     assert "  odometry        yes\n" in out and "  true poses      no\n" in out
+
+
+def test_the_slam_evaluation_checks_a_given_mit_log_once(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                         capsys: pytest.CaptureFixture[str]) -> None:
+    """An explicit `--mit LOG` had its head read twice: check_log when parsed, then again in read_mit.
+    Now read_mit reads the log check_log returned at parse; the default log (not parsed) is still checked there."""
+    import experiments.options
+    from experiments import slameval
+
+    heads: list[Path] = []
+    real = experiments.options._head
+    monkeypatch.setattr(experiments.options, "_head", lambda p, *a, **k: heads.append(Path(p)) or real(p, *a, **k))
+    bare = tmp_path / "bare.log"
+    bare.write_text("".join(f"FLASER 181 {' '.join(['2.00'] * 181)} 0 0 0 0 0 0 {t:g} host {t:g}\n" for t in (0, 0.2, 0.4)))
+    with pytest.raises(SystemExit) as stop:  # read, then refused for its missing relations: no run
+        slameval.main(["--out", str(tmp_path / "eval"), "--seeds", "0", "--long", "0", "--mit", str(bare)])
+    assert stop.value.code == 2
+    assert capsys.readouterr().err.startswith(f"python -m experiments.slameval: error: --mit {bare}: no relations file")
+    assert heads == [bare]
+    heads.clear()
+    monkeypatch.setattr(slameval, "MIT_LOG", bare)  # the default: checked once, in read_mit
+    with pytest.raises(SystemExit):
+        slameval.main(["--out", str(tmp_path / "eval"), "--seeds", "0", "--long", "0"])
+    assert heads == [bare]
+    assert capsys.readouterr().err.startswith(f"python -m experiments.slameval: error: --mit {bare}: no relations file")

@@ -746,3 +746,68 @@ def test_the_demo_sweeps_files_are_named_by_one_public_function(tmp_path):
     cells = [f"sweeps/{spec.name}/cells/{cell_key(spec.kind, params)}.parquet" for params in spec.cells()]
     assert demo_sweep_files(tmp_path) == cells and len(cells) == 9
     assert list(DEMO_OUTPUTS.folders["sweeps"].folders) == [spec.name]
+
+
+@pytest.mark.parametrize("damage, said", [
+    (b"", "it is empty"),
+    (b"name: t\nkind: extract\nfixed:\n  duration: [0.5", "it does not parse as YAML (line 4, column 17: expected ',' or ']', but got '<stream end>'"),
+    (b"- name\n- kind\n", "it holds a list, not a mapping"),
+    (b"name: t\nfixed: {duration: 0.5}\n", "it has no kind:"),
+    (b"\xff\xfe\x00", "it is not UTF-8 text"),
+], ids=["empty", "truncated", "list", "no-kind", "binary"])
+def test_a_damaged_sweep_yaml_beside_a_sweeps_outputs_is_named_in_the_refusal(sweep_file, tmp_path, capsys, damage, said):
+    """A sweep folder whose sweep.yaml was damaged by hand (cut, emptied, retyped) was refused as any
+    user's folder ("holds cells/..., which this run would replace but no earlier lmsbench sweep run
+    wrote"), naming no record: the message now names the damaged record and what is wrong with it,
+    one line, exit 2, nothing removed."""
+    out = tmp_path / "sw"
+    cells = _finished_sweep(out, yaml.safe_load(sweep_file.read_text()))
+    (out / "sweep.yaml").write_bytes(damage)
+    before = sorted(str(p.relative_to(out)) for p in out.rglob("*"))
+    assert main(["sweep", str(sweep_file), "--inprocess", "--no-progress", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1, err
+    assert err.startswith(f"lmsbench sweep: error: --out {out}: holds {cells[0]} and results.parquet and sweep.yaml, which "
+                          "this run would replace but no earlier lmsbench sweep run wrote (its record "
+                          f"{out / 'sweep.yaml'} is not one such a run leaves: {said}"), err
+    assert err.endswith("); give a new or empty folder\n"), err
+    assert sorted(str(p.relative_to(out)) for p in out.rglob("*")) == before
+    assert (out / "sweep.yaml").read_bytes() == damage
+
+
+def test_one_walk_to_the_nearest_existing_folder_for_check_out_and_the_sweeps_store(tmp_path):
+    """sweep.store._check_made_in repeated options._nearest_existing, but for a dangling link, where it
+    stops (the store says the link is no folder) and check_out's walk goes past it to the folder holding
+    it: one helper, options.nearest_existing, with both behaviours, and the messages as they were."""
+    from lms200 import LmsbenchError
+    from experiments.options import nearest_existing
+    from experiments.sweep.store import _check_made_in
+
+    (tmp_path / "dangling").symlink_to(tmp_path / "nowhere")
+    deep = tmp_path / "dangling" / "a" / "b"
+    assert nearest_existing(deep) == tmp_path
+    assert nearest_existing(deep, links=True) == tmp_path / "dangling"
+    assert nearest_existing(tmp_path / "new" / "x") == nearest_existing(tmp_path / "new" / "x", links=True) == tmp_path
+    assert nearest_existing(Path("/")) == Path("/")
+    with pytest.raises(LmsbenchError) as err:
+        _check_made_in(deep, "the cells", "and cells are left")
+    assert str(err.value) == (f"{deep}: the cells cannot be made: {tmp_path / 'dangling'} is not a folder (a file, or "
+                              "a link to none), and cells are left; give a folder that can be written")
+    _check_made_in(tmp_path / "new" / "x", "the cells", "and cells are left")  # a writable folder above: passes
+
+
+def test_a_damaged_slam_config_beside_a_slams_outputs_is_named_in_the_refusal(sim, tmp_path, capsys):
+    """The same for slam: its config.yaml retyped by hand beside its trajectory.tum is named, with what is wrong."""
+    out = tmp_path / "slam"
+    out.mkdir()
+    (out / "trajectory.tum").write_text("0.0 0 0 0 0 0 0 1\n")
+    for text, said in (("input: {}\nslam: {}\n", "its slam: has no preset:"),
+                       ("input: {}\nslam: {preset: default}\nnotes: mine\n", "it has notes:, which such a record does not hold"),
+                       ("input: [1]\nslam: {preset: default}\n", "its input: holds a list, not a mapping")):
+        (out / "config.yaml").write_text(text)
+        assert main(["slam", str(sim), "--quiet", "--out", str(out)]) == 2
+        assert capsys.readouterr().err == (
+            f"lmsbench slam: error: --out {out}: holds config.yaml and trajectory.tum, which this run would replace but "
+            f"no earlier lmsbench slam run wrote (its record {out / 'config.yaml'} is not one such a run leaves: {said}); "
+            "give a new or empty folder\n")
+        assert (out / "config.yaml").read_text() == text

@@ -3,6 +3,7 @@ many lines (the paper preset's EKF)."""
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 
 import numpy as np
@@ -37,10 +38,11 @@ def test_an_endless_iterator_ends_the_run_at_the_scan_bound(monkeypatch: pytest.
     monkeypatch.setattr(slam.run, "MAX_SLAM_SCANS", 20)
     read = itertools.count()
 
-    def endless():
+    def endless():  # one scan again and again, 0.1 s apart (all of one stamp is refused: same_stamp_problem)
         for _ in itertools.repeat(None):
-            assert next(read) < 100, "read on past the bound"
-            yield rec
+            k = next(read)
+            assert k < 100, "read on past the bound"
+            yield dataclasses.replace(rec, scan=rec.scan.replace(stamp=0.1 * k))
 
     for preset in ("default", "paper"):
         with pytest.warns(SlamLimitWarning, match=r"^records: the run ended after 20 scans \(slam.run.MAX_SLAM_SCANS"
@@ -56,7 +58,8 @@ def test_an_endless_iterator_ends_the_run_at_the_scan_bound(monkeypatch: pytest.
         warnings.simplefilter("error", SlamLimitWarning)
         assert run_slam(records, SlamConfig(preset="paper")).trajectory.shape == (20, 4)
         # max_scans reads no further than it says, silently, whatever the bound
-        assert run_slam(itertools.repeat(rec), SlamConfig(preset="paper"), max_scans=30).trajectory.shape == (30, 4)
+        timed = (dataclasses.replace(rec, scan=rec.scan.replace(stamp=0.1 * k)) for k in itertools.count())
+        assert run_slam(timed, SlamConfig(preset="paper"), max_scans=30).trajectory.shape == (30, 4)
         it = iter(records)
         assert run_slam(it, SlamConfig(preset="paper"), max_scans=5).trajectory.shape == (5, 4)
         assert next(it) is records[5]  # the source is not read past max_scans

@@ -97,6 +97,33 @@ def test_slam_skips_the_fewest_scans_out_of_time_order(sim_folder, tmp_path, cap
     assert in_time_order([3.0, 2.0, 1.0]) == [2] and in_time_order([]) == []
 
 
+def test_slam_refuses_scans_kept_of_one_stamp_before_any_work(sim_folder, tmp_path, capsys, monkeypatch):
+    """A review: `slam ev.clf --every 2` on 10 scans stamped [0]*9 + [1] kept 5 of one stamp, ran the
+    SLAM, then failed with "records: all 5 scans read have the same stamp" (run_slam's parameter, and 5
+    read where 10 were). Now refused before any SLAM work, naming the log and the option."""
+    import dataclasses
+
+    import slam.run
+    from experiments.cli import main
+    from lms200 import read_log
+
+    records = list(read_log(sim_folder / "scans.clf"))[:10]
+    stamped = [dataclasses.replace(r, scan=r.scan.replace(stamp=0.0 if k < 9 else 1.0)) for k, r in enumerate(records)]
+    write_log(tmp_path / "ev.clf", stamped)
+    ran: list[object] = []
+    monkeypatch.setattr(slam.run, "_run_steps", lambda *args: ran.append(args))  # the paper preset's SLAM work
+    monkeypatch.setattr("slam.scanslam.run_scan_slam", lambda *args: ran.append(args))
+    odd = [dataclasses.replace(r, scan=r.scan.replace(stamp=1.0 if k == 1 else 0.0)) for k, r in enumerate(records)]
+    write_log(tmp_path / "odd.clf", odd)  # read to its 7th scan: scan 1 stamped 1 s, the 4 kept (0, 2, 4, 6) 0 s
+    for name, extra, said in (("ev.clf", ["--every", "2"], "--every 2 keeps 5 of the 10"),
+                              ("odd.clf", ["--every", "2", "--max-scans", "4"], "--every 2 and --max-scans 4 keeps 4 of the 7")):
+        assert main(["slam", str(tmp_path / name), "--out", str(tmp_path / "o"), "--quiet", *extra]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert err == [f"lmsbench slam: error: {tmp_path / name}: {said} scans read, all stamped 0.000000 s; SLAM's "
+                       "motion model needs the time between scans"]
+        assert ran == []
+
+
 def test_slam_refuses_a_log_of_one_stamp_and_warns_of_steps_without_time(sim_folder, tmp_path, capsys):
     """A log whose stamps are all equal ran (exit 0): every step predicted no motion and searched no
     turn. Now refused in one line naming the file, with --rate-hz too (which kept one scan of it).

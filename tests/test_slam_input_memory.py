@@ -127,3 +127,20 @@ def test_records_slice_as_a_list_did(tmp_path):
     assert part[-1].scan.stamp == held[2].scan.stamp
     with pytest.raises(ValueError, match="run forward"):
         data.records[::-1]
+
+
+def test_taken_builds_its_log_scans_from_the_rows_directly(tmp_path, monkeypatch):
+    """LogScans.taken made an empty ScanRows (a LogScans of no rows) only to write its arrays over; it is
+    now built from the kept rows themselves: no ScanRows made, the same rows, the same scans read."""
+    import experiments.slamrun
+
+    path = tmp_path / "log.clf"
+    path.write_text("".join(_flaser(k, 10.0 + 0.1 * k) for k in range(8)))
+    data = load_input(path)
+    monkeypatch.setattr(experiments.slamrun, "ScanRows", lambda *a, **k: pytest.fail("a ScanRows was made"))
+    part = data.records.taken([1, 4, 6])
+    assert part.numbers.tolist() == [1, 4, 6] and part.stamps.tolist() == [10.1, 10.4, 10.6]
+    assert part.odom is not None and part.odom[:, 0].tolist() == [0.01, 0.04, 0.06]
+    assert part.truth is None and part.geometries == data.records.geometries and part.read_seconds == 0.0
+    assert [r.scan.stamp for r in part] == [10.1, 10.4, 10.6]
+    assert [r.scan.stamp for r in data.records[2:8:3]] == [10.2, 10.5]

@@ -173,9 +173,9 @@ class CellStore:
 def _check_made_in(folder: Path, what: str, why: str) -> None:
     """Raise LmsbenchError when ``folder`` (absent) cannot be made: its nearest existing ancestor is no folder
     (a regular file: NotADirectoryError) or not a writable one (PermissionError)."""
-    parent = folder.parent
-    while not parent.exists() and not parent.is_symlink() and parent != parent.parent:
-        parent = parent.parent
+    from experiments.options import nearest_existing
+
+    parent = nearest_existing(folder.parent, links=True)
     if not parent.is_dir():
         raise LmsbenchError(f"{folder}: {what} cannot be made: {parent} is not a folder (a file, or a link to none), "
                             f"{why}; give a folder that can be written")
