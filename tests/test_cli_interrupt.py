@@ -933,8 +933,14 @@ def test_a_stop_held_back_in_numbas_code_is_not_lost_nor_late(case: str) -> None
         proc.send_signal(signal.SIGINT)
         sent = time.monotonic()
         stdout, stderr = proc.communicate(timeout=120)
-        assert (proc.returncode, stderr, stdout) == (130, "lmsbench info: interrupted\n", "")
-        assert time.monotonic() - sent < 2.0
+        took = time.monotonic() - sent
+        if proc.returncode == 130:  # the second Ctrl-C's hard stop: no cleanup, the one line
+            assert (stderr, stdout) == ("lmsbench info: interrupted\n", ""), (stderr, stdout)
+        else:  # under load the second Ctrl-C can land as the first one's own retry is marked: an orderly stop
+            err = stderr.splitlines()
+            assert len(err) == 2 and err[0].startswith("stopped after ") and err[1] == "lmsbench info: interrupted" \
+                and stdout.startswith("status 130 "), (proc.returncode, stderr, stdout)
+        assert took < 2.0, (took, proc.returncode, stderr, stdout)
         return
     out = subprocess.run([sys.executable, "-c", HELD_STOPS, case], capture_output=True, text=True, cwd=REPO,
                          env=env, timeout=120)
