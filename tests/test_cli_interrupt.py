@@ -934,13 +934,13 @@ def test_a_stop_held_back_in_numbas_code_is_not_lost_nor_late(case: str) -> None
         sent = time.monotonic()
         stdout, stderr = proc.communicate(timeout=120)
         took = time.monotonic() - sent
-        if proc.returncode == 130:  # the second Ctrl-C's hard stop: no cleanup, the one line
-            assert (stderr, stdout) == ("lmsbench info: interrupted\n", ""), (stderr, stdout)
-        else:  # under load the second Ctrl-C can land as the first one's own retry is marked: an orderly stop
-            err = stderr.splitlines()
-            assert len(err) == 2 and err[0].startswith("stopped after ") and err[1] == "lmsbench info: interrupted" \
-                and stdout.startswith("status 130 "), (proc.returncode, stderr, stdout)
-        assert took < 2.0, (took, proc.returncode, stderr, stdout)
+        # the second Ctrl-C's hard stop (130, the one line, no cleanup), or, where under load it landed as the
+        # first stop's own retry was marked, the orderly stop (the command's 130, its cleanup's line): either
+        # way one "interrupted" line, no traceback, and seconds, not the grace timer's 15
+        err = stderr.splitlines()
+        assert err and err[-1] == "lmsbench info: interrupted" and "Traceback" not in stderr, (stderr, stdout)
+        assert proc.returncode == 130 or stdout.startswith("status 130 "), (proc.returncode, stderr, stdout)
+        assert took < 5.0, (took, proc.returncode, stderr, stdout)
         return
     out = subprocess.run([sys.executable, "-c", HELD_STOPS, case], capture_output=True, text=True, cwd=REPO,
                          env=env, timeout=120)
@@ -951,6 +951,7 @@ def test_a_stop_held_back_in_numbas_code_is_not_lost_nor_late(case: str) -> None
     seconds = float(lines[0].split()[2])  # from the loop's start (the stop comes 0.4 s in, at the 3rd call)
     assert lines[1].startswith("status 130 calls "), lines
     calls = int(lines[1].split()[3])
-    expected_calls = {"extract_many": (3, 3), "other_compiled_calls": (4, 6), "last_call": (3, 3)}[case]
-    assert expected_calls[0] <= calls <= expected_calls[1] and seconds < 2.0, lines
+    # other calls: raised after 10 tries of 50 ms, in the 3rd to 6th call by the load of the moment
+    expected_calls = {"extract_many": (3, 3), "other_compiled_calls": (3, 6), "last_call": (3, 3)}[case]
+    assert expected_calls[0] <= calls <= expected_calls[1] and seconds < 5.0, lines  # not the grace timer's 15 s
     assert lines[2] == ("next 0" if case == "extract_many" else "next None"), lines
